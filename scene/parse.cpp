@@ -1,0 +1,1875 @@
+// Scene file parsing and validation (interface.md §2; style.md items 4–6).
+//
+// How it works
+// ------------
+// Every object kind of the scene file (top level, grid, material, body, ...) declares its keys ONCE
+// in a `Table` below: name, type, default (or required), allowed range or values, unit and a one-line
+// meaning. Those tables drive three things, so they cannot drift apart:
+//   1. validation  — `check_object` walks a JSON object against its tables: unknown keys (with a
+//                    "did you mean"), wrong types, out-of-range values, unknown enumeration strings,
+//                    missing required keys; defaults are filled in;
+//   2. the reference — `schema_markdown()` prints the tables that docs/scene-format.md contains
+//                    verbatim (a unit test holds the two together);
+//   3. `schema_keys()` — every declared key, for the documentation test.
+// Rules that involve more than one key (a body naming a material, a geometry inside the grid, ...)
+// are checked by the section parsers after the tables. Every problem is collected, never thrown at
+// once; the parser throws one SceneError with one line per problem:
+//     "<label>: <JSON pointer>: got <what was found>, expected <what is allowed> [<unit>]".
+#include <muParser.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "scene/scene.hpp"
+
+namespace swmpm::scene {
+namespace {
+
+using json = nlohmann::json;
+constexpr double inf = std::numeric_limits<double>::infinity();
+
+// ------------------------------------------------------------------------------------------------
+// Registries: the exact strings a user writes. Enumerations with a to_string() in scene.cpp are
+// matched against it, so each of those strings exists once.
+// ------------------------------------------------------------------------------------------------
+
+constexpr std::array kFormulations{Formulation::dry,
+                                   Formulation::explicit_single_point,
+                                   Formulation::semi_implicit_single_point,
+                                   Formulation::semi_implicit_double_point,
+                                   Formulation::explicit_double_point,
+                                   Formulation::mpm_fem,
+                                   Formulation::automatic};
+constexpr std::array kShapeFunctions{ShapeFunction::linear, ShapeFunction::gimp,
+                                     ShapeFunction::bspline2, ShapeFunction::bspline3};
+constexpr std::array kModels{MaterialModel::linear_elastic, MaterialModel::hencky,
+                             MaterialModel::mohr_coulomb,   MaterialModel::drucker_prager,
+                             MaterialModel::nor_sand,       MaterialModel::fluid};
+
+template <class E, std::size_t N>
+std::vector<std::string> names_of(const std::array<E, N>& all) {
+  std::vector<std::string> out;
+  for (E e : all) out.push_back(to_string(e));
+  return out;
+}
+
+template <class E, std::size_t N>
+std::optional<E> from_string(const std::array<E, N>& all, const std::string& s) {
+  for (E e : all) {
+    if (to_string(e) == s) return e;
+  }
+  return std::nullopt;
+}
+
+// Ordered as the enumerators of SolidBc / FluidBc: the index is the enumerator.
+const std::vector<std::string>& solid_bc_names() {
+  static const std::vector<std::string> v{"fixed", "roller", "free", "friction"};
+  return v;
+}
+const std::vector<std::string>& fluid_bc_names() {
+  static const std::vector<std::string> v{"impermeable", "drained", "pressure"};
+  return v;
+}
+const std::vector<std::string>& face_names() {
+  static const std::vector<std::string> v{"x_min", "x_max", "y_min", "y_max", "z_min", "z_max"};
+  return v;
+}
+const std::vector<std::string>& geometry_types() {
+  static const std::vector<std::string> v{"box", "polygon", "slope", "gmsh", "surface-mesh"};
+  return v;
+}
+const std::vector<std::string>& implemented_geometry_types() {
+  static const std::vector<std::string> v{"box", "polygon"};
+  return v;
+}
+// Quantities of one followed particle (monitor with `at` or `particle`).
+const std::vector<std::string>& point_quantities() {
+  static const std::vector<std::string> v{
+      "pore_pressure", "displacement_x", "displacement_y", "displacement_z", "velocity_x",
+      "velocity_y",    "velocity_z",     "stress_xx",      "stress_yy",      "stress_zz",
+      "stress_xy",     "stress_yz",      "stress_xz",      "mean_effective_stress",
+      "deviatoric_stress", "porosity",   "plastic_strain", "water_level"};
+  return v;
+}
+// Quantities of the whole model (monitor with neither `at` nor `particle`).
+const std::vector<std::string>& global_quantities() {
+  static const std::vector<std::string> v{"kinetic_energy", "strain_energy", "total_energy",
+                                          "external_work"};
+  return v;
+}
+const std::vector<std::string>& all_quantities() {
+  static const std::vector<std::string> v = [] {
+    auto all = point_quantities();
+    for (const auto& q : global_quantities()) all.push_back(q);
+    return all;
+  }();
+  return v;
+}
+// Components that do not exist in a 2D (plane strain) scene. stress_zz does: it is the
+// out-of-plane normal stress of plane strain.
+bool is_3d_only_quantity(const std::string& q) {
+  return q == "displacement_z" || q == "velocity_z" || q == "stress_yz" || q == "stress_xz";
+}
+bool needs_fluid_quantity(const std::string& q) {
+  return q == "pore_pressure" || q == "porosity" || q == "water_level";
+}
+
+bool contains(const std::vector<std::string>& v, const std::string& s) {
+  return std::find(v.begin(), v.end(), s) != v.end();
+}
+
+std::string join(const std::vector<std::string>& v, const std::string& sep = ", ") {
+  std::string out;
+  for (std::size_t i = 0; i < v.size(); ++i) out += (i ? sep : "") + v[i];
+  return out;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Small text helpers for messages.
+// ------------------------------------------------------------------------------------------------
+
+std::string fmt_g(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.10g", x);
+  return buf;
+}
+
+/// A JSON value as the user wrote it, shortened for a message.
+std::string shown(const json& v) {
+  std::string s = v.dump(-1, ' ', false, json::error_handler_t::replace);
+  if (s.size() > 60) s = s.substr(0, 57) + "...";
+  return s;
+}
+
+std::string quoted(const std::string& s) { return "\"" + s + "\""; }
+
+std::string fmt_vec(const Vec3& v, int dim) {
+  std::string out = "[";
+  for (int d = 0; d < dim; ++d) out += (d ? ", " : "") + fmt_g(v[static_cast<std::size_t>(d)]);
+  return out + "]";
+}
+
+/// JSON pointer escaping of one reference token (RFC 6901).
+std::string escape(const std::string& key) {
+  std::string out;
+  for (char ch : key) {
+    if (ch == '~') out += "~0";
+    else if (ch == '/') out += "~1";
+    else out += ch;
+  }
+  return out;
+}
+
+std::string item(const std::string& path, std::size_t i) { return path + "/" + std::to_string(i); }
+
+std::size_t levenshtein(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t subst = prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, subst});
+    }
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string lower(std::string s) {
+  for (char& ch : s) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return s;
+}
+
+/// The closest candidate to `s`, if close enough to be a plausible typo.
+std::optional<std::string> closest(const std::string& s, const std::vector<std::string>& candidates) {
+  std::optional<std::string> best;
+  std::size_t best_d = std::numeric_limits<std::size_t>::max();
+  for (const auto& c : candidates) {
+    const std::size_t d = levenshtein(lower(s), lower(c));
+    if (d < best_d) best_d = d, best = c;
+  }
+  // Up to one edit per three characters, at least one, at most three.
+  const std::size_t limit = std::clamp<std::size_t>(s.size() / 3, 1, 3);
+  if (best && best_d <= limit) return best;
+  return std::nullopt;
+}
+
+std::string did_you_mean(const std::string& s, const std::vector<std::string>& candidates) {
+  const auto c = closest(s, candidates);
+  return c ? " (did you mean " + quoted(*c) + "?)" : "";
+}
+
+// ------------------------------------------------------------------------------------------------
+// The schema.
+// ------------------------------------------------------------------------------------------------
+
+/// Collects problems; knows the scene dimension once it has been read (0 while unknown, in which
+/// case vectors may have 2 or 3 components).
+struct Ctx {
+  std::string label;
+  int dim = 0;
+  std::vector<std::string> errors;
+  void error(const std::string& path, const std::string& what) {
+    errors.push_back(label + ": " + (path.empty() ? std::string("(top level)") : path) + ": " + what);
+  }
+};
+
+enum class Type {
+  number,   // a JSON number within `range`
+  integer,  // a whole number within `range`
+  boolean,
+  string,   // a non-empty string
+  choice,   // one string of `values`
+  vector,   // exactly `dimension` numbers
+  object,   // checked by its own table
+  objects,  // an array of objects, each checked by its own table
+  choices,  // an array of strings, each one of `values`
+  custom    // checked by `check`
+};
+
+struct Range {
+  double lo = -inf;
+  double hi = inf;
+  bool lo_open = false;
+  bool hi_open = false;
+  bool contains(double x) const {
+    return (lo_open ? x > lo : x >= lo) && (hi_open ? x < hi : x <= hi);
+  }
+};
+constexpr Range any_number{};
+constexpr Range positive{0.0, inf, true, false};
+constexpr Range non_negative{0.0, inf, false, false};
+constexpr Range closed(double a, double b) { return {a, b, false, false}; }
+constexpr Range half_open(double a, double b) { return {a, b, false, true}; }  // [a, b)
+constexpr Range open(double a, double b) { return {a, b, true, true}; }        // (a, b)
+constexpr Range left_open(double a, double b) { return {a, b, true, false}; }  // (a, b]
+constexpr Range at_least(double a) { return {a, inf, false, false}; }
+
+struct Key;
+/// Checks a value of a `custom` key; reports its own problems and returns whether it is valid.
+using CustomCheck = bool (*)(Ctx&, const json& value, const std::string& path, const Key& key);
+
+struct Key {
+  std::string name;
+  Type type = Type::number;
+  bool required = false;
+  json def;                          // default when absent (null: none)
+  Range range;                       // number, integer
+  std::vector<std::string> values;   // choice, choices
+  std::string unit;                  // SI unit; "-" dimensionless; "" not a quantity
+  std::string meaning;               // one line, for the reference
+  std::string type_text;             // reference "type" column (custom types)
+  std::string expect;                // "expected ..." text of messages (custom types, overrides)
+  std::string allowed;               // reference "allowed" column (overrides the generated one)
+  std::string default_text;          // reference "default" column (overrides the generated one)
+  CustomCheck check = nullptr;       // custom
+  bool nonempty = false;             // objects, choices
+};
+
+struct Table {
+  std::string title;  // reference heading
+  std::string where;  // where the object sits in the scene file
+  std::vector<Key> keys;
+};
+
+// -- phrases generated from a key, shared by messages and the reference ---------------------------
+
+std::string number_phrase(const Range& r, bool integer) {
+  const std::string a = integer ? "an integer" : "a number";
+  const bool has_lo = r.lo != -inf, has_hi = r.hi != inf;
+  if (!has_lo && !has_hi) return a;
+  if (!integer && has_lo && !has_hi && r.lo == 0.0) {
+    return r.lo_open ? "a positive number" : "a non-negative number";
+  }
+  if (has_lo && !has_hi) return a + (r.lo_open ? " > " : " >= ") + fmt_g(r.lo);
+  if (!has_lo && has_hi) return a + (r.hi_open ? " < " : " <= ") + fmt_g(r.hi);
+  if (integer) return a + " in " + fmt_g(r.lo) + ".." + fmt_g(r.hi);
+  return a + " in " + (r.lo_open ? "(" : "[") + fmt_g(r.lo) + ", " + fmt_g(r.hi) +
+         (r.hi_open ? ")" : "]");
+}
+
+std::string range_text(const Range& r, bool integer) {
+  const bool has_lo = r.lo != -inf, has_hi = r.hi != inf;
+  if (!has_lo && !has_hi) return "any";
+  if (has_lo && !has_hi) return std::string(r.lo_open ? "> " : "≥ ") + fmt_g(r.lo);
+  if (!has_lo && has_hi) return std::string(r.hi_open ? "< " : "≤ ") + fmt_g(r.hi);
+  if (integer) return fmt_g(r.lo) + ".." + fmt_g(r.hi);
+  return (r.lo_open ? "(" : "[") + fmt_g(r.lo) + ", " + fmt_g(r.hi) + (r.hi_open ? ")" : "]");
+}
+
+std::string vector_phrase(int dim) {
+  return dim == 0 ? "a vector of 2 or 3 numbers (one per dimension)"
+                  : "a vector of " + std::to_string(dim) + " numbers (one per dimension)";
+}
+
+/// "expected ..." part of a message for a key, with its unit.
+std::string expected(const Key& k, const Ctx& c) {
+  std::string e;
+  if (!k.expect.empty()) {
+    e = k.expect;
+  } else {
+    switch (k.type) {
+      case Type::number: e = number_phrase(k.range, false); break;
+      case Type::integer: e = number_phrase(k.range, true); break;
+      case Type::boolean: e = "true or false"; break;
+      case Type::string: e = "a non-empty string"; break;
+      case Type::choice: e = "one of: " + join(k.values); break;
+      case Type::vector: e = vector_phrase(c.dim); break;
+      case Type::object: e = "an object"; break;
+      case Type::objects: e = k.nonempty ? "a non-empty array of objects" : "an array of objects"; break;
+      case Type::choices: e = "a non-empty array of strings, each one of: " + join(k.values); break;
+      case Type::custom: e = "a valid value"; break;
+    }
+  }
+  if (!k.unit.empty()) e += " [" + k.unit + "]";
+  return e;
+}
+
+void report(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  c.error(path, "got " + shown(v) + ", expected " + expected(k, c));
+}
+
+// -- expressions (muParser) -------------------------------------------------------------------
+
+/// Empty when `expr` parses with the given variables and the constant pi; else muParser's message.
+std::string expression_problem(const std::string& expr, const std::vector<std::string>& vars) {
+  if (expr.find_first_not_of(" \t") == std::string::npos) return "the expression is empty";
+  try {
+    mu::Parser p;
+    std::array<double, 3> values{0.0, 0.0, 0.0};
+    for (std::size_t i = 0; i < vars.size() && i < values.size(); ++i) p.DefineVar(vars[i], &values[i]);
+    p.DefineConst("pi", std::numbers::pi);
+    p.SetExpr(expr);
+    (void)p.Eval();
+  } catch (const mu::Parser::exception_type& e) {
+    return e.GetMsg();
+  }
+  return {};
+}
+
+// -- custom checks --------------------------------------------------------------------------------
+
+bool is_integral(const json& v) {
+  if (v.is_number_integer() || v.is_number_unsigned()) return true;
+  if (!v.is_number_float()) return false;
+  const double x = v.get<double>();
+  return std::isfinite(x) && std::floor(x) == x;
+}
+
+bool is_number_array(const json& v, std::size_t n) {
+  return v.is_array() && v.size() == n &&
+         std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number(); });
+}
+
+bool dim_ok(const Ctx& c, std::size_t n) {
+  return c.dim == 0 ? (n == 2 || n == 3) : n == static_cast<std::size_t>(c.dim);
+}
+
+bool check_dir_name(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (v.is_string()) {
+    const auto& s = v.get_ref<const std::string&>();
+    const bool chars_ok = !s.empty() && std::all_of(s.begin(), s.end(), [](char ch) {
+      return std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '_' || ch == '-';
+    });
+    if (chars_ok && s != "." && s != "..") return true;
+  }
+  report(c, v, path, k);
+  return false;
+}
+
+bool check_monitor_name(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (v.is_string()) {
+    const auto& s = v.get_ref<const std::string&>();
+    if (!s.empty() && std::all_of(s.begin(), s.end(), [](char ch) {
+          return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-';
+        })) {
+      return true;
+    }
+  }
+  report(c, v, path, k);
+  return false;
+}
+
+bool check_dt(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if ((v.is_number() && v.get<double>() > 0.0) || v == "auto") return true;
+  report(c, v, path, k);
+  return false;
+}
+
+bool check_pore_pressure(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (v.is_number() || v == "hydrostatic") return true;
+  report(c, v, path, k);
+  return false;
+}
+
+bool check_stress(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (v == "geostatic" || is_number_array(v, 6)) return true;
+  report(c, v, path, k);
+  return false;
+}
+
+bool check_load_value(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (v.is_number()) return true;
+  if (v.is_array() && std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number(); }) &&
+      dim_ok(c, v.size())) {
+    return true;
+  }
+  report(c, v, path, k);
+  return false;
+}
+
+bool check_velocity(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (!v.is_array() || !dim_ok(c, v.size())) {
+    report(c, v, path, k);
+    return false;
+  }
+  bool ok = true;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const json& e = v[i];
+    if (e.is_number()) continue;
+    if (!e.is_string()) {
+      c.error(item(path, i), "got " + shown(e) + ", expected a number or an expression in x, y, z [m/s]");
+      ok = false;
+      continue;
+    }
+    const std::string problem = expression_problem(e.get<std::string>(), {"x", "y", "z"});
+    if (!problem.empty()) {
+      c.error(item(path, i), "got " + shown(e) + ", expected an expression in x, y, z (muParser: " +
+                                 problem + ")");
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+bool check_time_expression(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (!v.is_string()) {
+    report(c, v, path, k);
+    return false;
+  }
+  const std::string problem = expression_problem(v.get<std::string>(), {"t"});
+  if (problem.empty()) return true;
+  c.error(path, "got " + shown(v) + ", expected an expression in t (muParser: " + problem + ")");
+  return false;
+}
+
+bool check_time_table(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (!v.is_array() || v.empty() ||
+      !std::all_of(v.begin(), v.end(), [](const json& p) { return is_number_array(p, 2); })) {
+    report(c, v, path, k);
+    return false;
+  }
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    const double t0 = v[i - 1][0].get<double>(), t1 = v[i][0].get<double>();
+    if (!(t1 > t0)) {
+      c.error(item(path, i), "got t = " + fmt_g(t1) + " after t = " + fmt_g(t0) +
+                                 ", expected strictly increasing times [s]");
+      return false;
+    }
+  }
+  return true;
+}
+
+bool check_vertices(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (!v.is_array() ||
+      !std::all_of(v.begin(), v.end(), [](const json& p) { return is_number_array(p, 2); })) {
+    report(c, v, path, k);
+    return false;
+  }
+  if (v.size() < 3) {
+    c.error(path, "got " + std::to_string(v.size()) + " vertices, expected at least 3 [x, y] pairs [m]");
+    return false;
+  }
+  return true;
+}
+
+// -- the tables -----------------------------------------------------------------------------------
+
+const Table& scene_table() {
+  static const Table t{
+      "Top level", "the scene object",
+      {
+          {.name = "name", .type = Type::custom, .required = true,
+           .meaning = "Scene name; the default run directory is `runs/<name>`.",
+           .type_text = "string", .expect = "a name usable as a directory: letters, digits, '.', '_', '-'",
+           .allowed = "`[A-Za-z0-9._-]+`", .check = check_dir_name},
+          {.name = "dimension", .type = Type::integer, .required = true, .range = closed(2, 3),
+           .meaning = "2 (plane strain) or 3.", .expect = "2 or 3", .allowed = "2 or 3"},
+          {.name = "formulation", .type = Type::choice, .def = "auto", .values = names_of(kFormulations),
+           .meaning = "Solution scheme; `auto` picks one from the scene and says why."},
+          {.name = "gravity", .type = Type::vector, .unit = "m/s^2",
+           .meaning = "Gravitational acceleration.", .default_text = "zeros"},
+          {.name = "gravity_ramp", .def = 0.0, .range = non_negative, .unit = "s",
+           .meaning = "Gravity grows linearly from zero over this time (0: at once)."},
+          {.name = "grid", .type = Type::object, .required = true,
+           .meaning = "The background grid, see [grid](#grid)."},
+          {.name = "materials", .type = Type::objects, .required = true,
+           .meaning = "Materials, see [materials](#materials).", .nonempty = true},
+          {.name = "bodies", .type = Type::objects, .required = true,
+           .meaning = "Bodies, see [bodies](#bodies).", .nonempty = true},
+          {.name = "boundaries", .type = Type::objects, .def = json::array(),
+           .meaning = "Grid-face conditions, see [boundaries](#boundaries)."},
+          {.name = "loads", .type = Type::objects, .def = json::array(),
+           .meaning = "Surface loads on bodies, see [loads](#loads)."},
+          {.name = "time", .type = Type::object, .required = true,
+           .meaning = "End time and time step, see [time](#time)."},
+          {.name = "output", .type = Type::object,
+           .meaning = "Frames and monitors, see [output](#output).", .default_text = "all defaults"},
+          {.name = "solver", .type = Type::object,
+           .meaning = "Scheme switches, see [solver](#solver).", .default_text = "all defaults"},
+      }};
+  return t;
+}
+
+const Table& grid_table() {
+  static const Table t{
+      "Grid", "`grid`",
+      {
+          {.name = "cell_size", .required = true, .range = positive, .unit = "m",
+           .meaning = "Edge length of the square (2D) or cubic (3D) cells."},
+          {.name = "min", .type = Type::vector, .required = true, .unit = "m",
+           .meaning = "Lower corner of the grid."},
+          {.name = "max", .type = Type::vector, .required = true, .unit = "m",
+           .meaning = "Upper corner; > `min`; rounded up to a whole number of cells."},
+          {.name = "shape_function", .type = Type::choice, .def = "gimp",
+           .values = names_of(kShapeFunctions), .meaning = "Grid basis functions."},
+      }};
+  return t;
+}
+
+const Table& material_table() {
+  static const Table t{
+      "Material (every model)", "`materials[]`",
+      {
+          {.name = "name", .type = Type::string, .required = true,
+           .meaning = "Unique name; bodies refer to it in `solid` / `fluid`."},
+          {.name = "model", .type = Type::choice, .required = true, .values = names_of(kModels),
+           .meaning = "Constitutive model; selects the parameter tables below."},
+      }};
+  return t;
+}
+
+const Table& solid_table() {
+  static const Table t{
+      "Solid skeleton (every model except `fluid`)", "`materials[]`",
+      {
+          {.name = "density", .range = positive, .unit = "kg/m^3",
+           .meaning = "Bulk density of a dry body (instead of `grain_density` + `porosity`)."},
+          {.name = "grain_density", .range = positive, .unit = "kg/m^3",
+           .meaning = "Density of the grains; a porous skeleton, needs `porosity`."},
+          {.name = "porosity", .range = open(0, 1), .unit = "-",
+           .meaning = "Porosity n (pore volume / total volume)."},
+          {.name = "hydraulic_conductivity", .range = positive, .unit = "m/s",
+           .meaning = "Hydraulic conductivity k (or `intrinsic_permeability`, not both)."},
+          {.name = "intrinsic_permeability", .range = positive, .unit = "m^2",
+           .meaning = "Intrinsic permeability κ = k μ / (ρ_w g) (or `hydraulic_conductivity`)."},
+          {.name = "permeability_law", .type = Type::choice, .def = "constant",
+           .values = {"constant", "kozeny-carman"},
+           .meaning = "Permeability constant, or varying with porosity (Kozeny–Carman)."},
+      }};
+  return t;
+}
+
+const Table& elastic_table() {
+  static const Table t{
+      "Elasticity (`linear-elastic`, `hencky`, `mohr-coulomb`, `drucker-prager`)", "`materials[]`",
+      {
+          {.name = "youngs_modulus", .required = true, .range = positive, .unit = "Pa",
+           .meaning = "Young's modulus E."},
+          {.name = "poisson_ratio", .required = true, .range = half_open(-1, 0.5), .unit = "-",
+           .meaning = "Poisson's ratio ν."},
+      }};
+  return t;
+}
+
+const Table& strength_table() {
+  static const Table t{
+      "Strength (`mohr-coulomb`, `drucker-prager`)", "`materials[]`",
+      {
+          {.name = "cohesion", .def = 0.0, .range = non_negative, .unit = "Pa",
+           .meaning = "Cohesion c."},
+          {.name = "friction_angle", .required = true, .range = half_open(0, 90), .unit = "deg",
+           .meaning = "Friction angle φ."},
+          {.name = "dilation_angle", .def = 0.0, .range = half_open(0, 90), .unit = "deg",
+           .meaning = "Dilation angle ψ (0: no dilatancy).", .allowed = "[0, `friction_angle`]"},
+          {.name = "strength_reduction_factor", .def = 1.0, .range = positive, .unit = "-",
+           .meaning = "c and tan φ are divided by it (slope stability; 1: none)."},
+          {.name = "tension_cutoff", .def = 0.0, .range = non_negative, .unit = "Pa",
+           .meaning = "Tensile strength limit on the mean stress (0: no tension)."},
+      }};
+  return t;
+}
+
+const Table& nor_sand_table() {
+  static const Table t{
+      "Nor-Sand (`nor-sand`)", "`materials[]`",
+      {
+          {.name = "shear_modulus", .required = true, .range = positive, .unit = "Pa",
+           .meaning = "Elastic shear modulus G."},
+          {.name = "swelling_index", .required = true, .range = positive, .unit = "-",
+           .meaning = "Slope κ of the elastic unloading line in v–ln p′."},
+          {.name = "compression_index", .required = true, .range = positive, .unit = "-",
+           .meaning = "Slope λ of the critical state line in v–ln p′."},
+          {.name = "reference_specific_volume", .required = true, .range = positive, .unit = "-",
+           .meaning = "Specific volume Γ of the critical state line at the reference pressure."},
+          {.name = "critical_state_ratio", .required = true, .range = positive, .unit = "-",
+           .meaning = "Critical state stress ratio M (triaxial compression)."},
+          {.name = "yield_coefficient", .required = true, .range = positive, .unit = "-",
+           .meaning = "Shape coefficient N of the yield surface."},
+          {.name = "potential_coefficient", .required = true, .range = positive, .unit = "-",
+           .meaning = "Shape coefficient of the plastic potential."},
+          {.name = "hardening_modulus", .required = true, .range = positive, .unit = "-",
+           .meaning = "Plastic hardening modulus H."},
+          {.name = "dilatancy_multiplier", .required = true, .range = any_number, .unit = "-",
+           .meaning = "State–dilatancy coefficient χ (may be negative)."},
+          {.name = "initial_specific_volume", .required = true, .range = positive, .unit = "-",
+           .meaning = "Specific volume v = 1 + e at the start."},
+          {.name = "dilatancy_cutoff_start", .def = 1.0, .range = positive, .unit = "-",
+           .meaning = "Where the dilatancy cut-off starts acting."},
+          {.name = "dilatancy_cutoff_end", .def = 1.5, .range = positive, .unit = "-",
+           .meaning = "Where the dilatancy cut-off is complete."},
+      }};
+  return t;
+}
+
+const Table& fluid_table() {
+  static const Table t{
+      "Fluid (`fluid`)", "`materials[]`",
+      {
+          {.name = "density", .required = true, .range = positive, .unit = "kg/m^3",
+           .meaning = "Fluid density ρ_w."},
+          {.name = "bulk_modulus", .required = true, .range = positive, .unit = "Pa",
+           .meaning = "Fluid bulk modulus K_w."},
+          {.name = "dynamic_viscosity", .def = 1.0e-3, .range = positive, .unit = "Pa s",
+           .meaning = "Dynamic viscosity μ (turns `intrinsic_permeability` into conductivity)."},
+      }};
+  return t;
+}
+
+const Table& body_table() {
+  static const Table t{
+      "Body", "`bodies[]`",
+      {
+          {.name = "name", .type = Type::string, .required = true,
+           .meaning = "Unique name; loads refer to it."},
+          {.name = "geometry", .type = Type::object, .required = true,
+           .meaning = "Where the body is, see [geometry](#geometry)."},
+          {.name = "solid", .type = Type::string,
+           .meaning = "Name of a solid material (the skeleton)."},
+          {.name = "fluid", .type = Type::string,
+           .meaning = "Name of a `fluid` material (pore fluid, or free fluid without `solid`)."},
+          {.name = "particles_per_cell", .type = Type::integer, .def = 2, .range = closed(1, 8),
+           .meaning = "Particles per cell and direction (n^dimension per cell)."},
+          {.name = "initial", .type = Type::object,
+           .meaning = "Initial state, see [initial](#initial).", .default_text = "all defaults"},
+      }};
+  return t;
+}
+
+const Table& geometry_table() {
+  static const Table t{
+      "Geometry (every type)", "`bodies[].geometry`",
+      {
+          {.name = "type", .type = Type::choice, .required = true, .values = geometry_types(),
+           .meaning = "Kind of geometry; `slope`, `gmsh`, `surface-mesh` are not implemented yet."},
+      }};
+  return t;
+}
+
+const Table& box_table() {
+  static const Table t{
+      "Box (`box`)", "`bodies[].geometry`",
+      {
+          {.name = "min", .type = Type::vector, .required = true, .unit = "m",
+           .meaning = "Lower corner; inside the grid."},
+          {.name = "max", .type = Type::vector, .required = true, .unit = "m",
+           .meaning = "Upper corner; > `min` in every component, inside the grid."},
+      }};
+  return t;
+}
+
+const Table& polygon_table() {
+  static const Table t{
+      "Polygon (`polygon`, 2D only)", "`bodies[].geometry`",
+      {
+          {.name = "vertices", .type = Type::custom, .required = true, .unit = "m",
+           .meaning = "Corners in order (either orientation); non-zero area, inside the grid.",
+           .type_text = "array of [x, y]", .expect = "an array of at least 3 [x, y] pairs",
+           .allowed = "≥ 3 vertices", .check = check_vertices},
+      }};
+  return t;
+}
+
+const Table& initial_table() {
+  static const Table t{
+      "Initial state", "`bodies[].initial`",
+      {
+          {.name = "pore_pressure", .type = Type::custom, .unit = "Pa",
+           .meaning = "Initial pore pressure (compression positive), or hydrostatic; needs a body `fluid`.",
+           .type_text = "number or string", .expect = "a number or \"hydrostatic\"",
+           .allowed = "any, or `\"hydrostatic\"`", .check = check_pore_pressure},
+          {.name = "water_table", .range = any_number, .unit = "m",
+           .meaning = "Height of the free water surface for `\"hydrostatic\"` (default: top of the body)."},
+          {.name = "stress", .type = Type::custom, .unit = "Pa",
+           .meaning = "Initial effective stress: `\"geostatic\"`, or constant Voigt [xx, yy, zz, xy, yz, xz], tension positive.",
+           .type_text = "string or 6 numbers", .expect = "\"geostatic\" or an array of 6 numbers (xx, yy, zz, xy, yz, xz)",
+           .allowed = "`\"geostatic\"` or 6 numbers", .check = check_stress},
+          {.name = "k0", .def = 0.5, .range = closed(0, 10), .unit = "-",
+           .meaning = "Lateral earth pressure coefficient (only with `\"geostatic\"`)."},
+          {.name = "porosity", .range = open(0, 1), .unit = "-",
+           .meaning = "Initial porosity; overrides the material's."},
+          {.name = "velocity", .type = Type::custom, .unit = "m/s",
+           .meaning = "Initial velocity; each component a number or a muParser expression in x, y, z (`pi` defined).",
+           .type_text = "`dimension` numbers or strings",
+           .expect = "an array of one number or expression per dimension", .allowed = "expressions in x, y, z",
+           .default_text = "zeros", .check = check_velocity},
+      }};
+  return t;
+}
+
+const Table& boundary_table() {
+  static const Table t{
+      "Boundary", "`boundaries[]`",
+      {
+          {.name = "on", .type = Type::choice, .required = true, .values = face_names(),
+           .meaning = "Grid face (`z_min`, `z_max` only in 3D); each face at most once."},
+          {.name = "solid", .type = Type::choice, .def = "free", .values = solid_bc_names(),
+           .meaning = "Solid velocity condition: fixed (all components), roller (normal), free, friction."},
+          {.name = "coefficient", .range = non_negative, .unit = "-",
+           .meaning = "Coulomb friction coefficient; required with `friction`, only there."},
+          {.name = "fluid", .type = Type::choice, .values = fluid_bc_names(),
+           .meaning = "Fluid condition: no flow, p = 0, or p = `value`; needs a fluid in the scene."},
+          {.name = "value", .range = any_number, .unit = "Pa",
+           .meaning = "Prescribed pore pressure; required with `pressure`, only there."},
+      }};
+  return t;
+}
+
+const Table& load_table() {
+  static const Table t{
+      "Load", "`loads[]`",
+      {
+          {.name = "type", .type = Type::choice, .required = true, .values = {"traction", "pressure"},
+           .meaning = "A traction vector, or a pressure normal to the face."},
+          {.name = "body", .type = Type::string, .required = true,
+           .meaning = "Name of the loaded body."},
+          {.name = "face", .type = Type::choice, .required = true, .values = face_names(),
+           .meaning = "The body's surface layer facing that way (`z_*` only in 3D)."},
+          {.name = "value", .type = Type::custom, .required = true, .unit = "Pa",
+           .meaning = "traction: a `dimension`-vector; pressure: a number, positive pushing onto the face.",
+           .type_text = "vector or number", .expect = "a vector of one number per dimension (traction) or a number (pressure)",
+           .allowed = "any", .check = check_load_value},
+          {.name = "region", .type = Type::object,
+           .meaning = "Load only the face particles inside this box at t = 0, see [region](#region)."},
+          {.name = "ramp", .def = 0.0, .range = non_negative, .unit = "s",
+           .meaning = "The load grows linearly from zero over this time (0: at once)."},
+          {.name = "function", .type = Type::custom, .unit = "-",
+           .meaning = "Multiplier f(t): a muParser expression in t (`pi` defined), e.g. `\"sin(5*pi*t)\"`.",
+           .type_text = "string", .expect = "an expression in t", .allowed = "expression in t",
+           .check = check_time_expression},
+          {.name = "table", .type = Type::custom, .unit = "-",
+           .meaning = "Multiplier f(t) as [t, f] pairs, piecewise linear, clamped; not with `function`.",
+           .type_text = "array of [t, f]", .expect = "a non-empty array of [t, f] pairs",
+           .allowed = "t strictly increasing", .check = check_time_table},
+      }};
+  return t;
+}
+
+const Table& region_table() {
+  static const Table t{
+      "Region", "`loads[].region`",
+      {
+          {.name = "min", .type = Type::vector, .required = true, .unit = "m", .meaning = "Lower corner."},
+          {.name = "max", .type = Type::vector, .required = true, .unit = "m",
+           .meaning = "Upper corner; > `min` in every component."},
+      }};
+  return t;
+}
+
+const Table& time_table() {
+  static const Table t{
+      "Time", "`time`",
+      {
+          {.name = "end", .required = true, .range = positive, .unit = "s", .meaning = "Simulated end time."},
+          {.name = "dt", .type = Type::custom, .def = "auto", .unit = "s",
+           .meaning = "Time step, or `\"auto\"`: the critical step of the formulation times `cfl`.",
+           .type_text = "number or string", .expect = "a positive number or \"auto\"",
+           .allowed = "> 0 or `\"auto\"`", .check = check_dt},
+          {.name = "cfl", .def = 0.5, .range = left_open(0, 1), .unit = "-",
+           .meaning = "Courant number used with `\"auto\"`."},
+      }};
+  return t;
+}
+
+const Table& output_table() {
+  static const Table t{
+      "Output", "`output`",
+      {
+          {.name = "interval", .def = 0.0, .range = non_negative, .unit = "s",
+           .meaning = "Simulated time between VTU frames (0: first and last only)."},
+          {.name = "monitor_interval", .def = 0.0, .range = non_negative, .unit = "s",
+           .meaning = "Simulated time between rows of monitors.csv (0: every step)."},
+          {.name = "monitors", .type = Type::objects, .def = json::array(),
+           .meaning = "Time histories, see [monitors](#monitors)."},
+      }};
+  return t;
+}
+
+const Table& monitor_table() {
+  static const Table t{
+      "Monitor", "`output.monitors[]`",
+      {
+          {.name = "name", .type = Type::custom, .required = true,
+           .meaning = "Unique; CSV columns are `<name>.<quantity>`.", .type_text = "string",
+           .expect = "a name of letters, digits, '_', '-'", .allowed = "`[A-Za-z0-9_-]+`",
+           .check = check_monitor_name},
+          {.name = "at", .type = Type::vector, .unit = "m",
+           .meaning = "Follow the particle of `phase` nearest to this point at t = 0."},
+          {.name = "particle", .type = Type::integer, .range = at_least(0),
+           .meaning = "Or follow this particle id (not with `at`)."},
+          {.name = "phase", .type = Type::choice, .def = "solid", .values = {"solid", "fluid"},
+           .meaning = "Which phase's particle (`fluid` needs a fluid in the scene)."},
+          {.name = "quantities", .type = Type::choices, .required = true, .values = all_quantities(),
+           .meaning = "What to record; see [monitors](#monitors) for which need what.", .nonempty = true},
+      }};
+  return t;
+}
+
+const Table& solver_table() {
+  static const Table t{
+      "Solver", "`solver`",
+      {
+          {.name = "flip", .def = 0.99, .range = closed(0, 1), .unit = "-",
+           .meaning = "FLIP fraction of the FLIP/PIC velocity update (1: pure FLIP)."},
+          {.name = "damping", .def = 0.0, .range = half_open(0, 1), .unit = "-",
+           .meaning = "Local (Cundall) damping coefficient."},
+          {.name = "kinematics", .type = Type::choice, .def = "finite-strain",
+           .values = {"small-strain", "finite-strain"}, .meaning = "Strain measure of the update."},
+          {.name = "checkpoint_every", .type = Type::integer, .def = 50, .range = at_least(1),
+           .meaning = "Steps between in-memory snapshots of the last good state."},
+          {.name = "stabilisation", .type = Type::object,
+           .meaning = "See [stabilisation](#stabilisation).", .default_text = "all defaults"},
+      }};
+  return t;
+}
+
+const Table& stabilisation_table() {
+  static const Table t{
+      "Stabilisation", "`solver.stabilisation`",
+      {
+          {.name = "strain_smoothing", .type = Type::boolean, .def = true,
+           .meaning = "Smooth volumetric strain over cells."},
+          {.name = "pressure", .type = Type::choice, .def = "none",
+           .values = {"none", "mfvp-constant", "mfvp-linear", "mfvp-quadratic", "node-remap"},
+           .meaning = "Pore-pressure stabilisation."},
+          {.name = "fbar", .type = Type::choice, .def = "none", .values = {"none", "standard", "modified"},
+           .meaning = "F-bar treatment of volumetric locking."},
+      }};
+  return t;
+}
+
+/// Every table, in the order of the reference.
+std::vector<const Table*> all_tables() {
+  return {&scene_table(),     &grid_table(),     &material_table(),  &solid_table(),
+          &elastic_table(),   &strength_table(), &nor_sand_table(),  &fluid_table(),
+          &body_table(),      &geometry_table(), &box_table(),       &polygon_table(),
+          &initial_table(),   &boundary_table(), &load_table(),      &region_table(),
+          &time_table(),      &output_table(),   &monitor_table(),   &solver_table(),
+          &stabilisation_table()};
+}
+
+/// The parameter tables of a material model, besides material_table().
+std::vector<const Table*> model_tables(MaterialModel m) {
+  switch (m) {
+    case MaterialModel::linear_elastic:
+    case MaterialModel::hencky: return {&solid_table(), &elastic_table()};
+    case MaterialModel::mohr_coulomb:
+    case MaterialModel::drucker_prager: return {&solid_table(), &elastic_table(), &strength_table()};
+    case MaterialModel::nor_sand: return {&solid_table(), &nor_sand_table()};
+    case MaterialModel::fluid: return {&fluid_table()};
+  }
+  return {};
+}
+
+// ------------------------------------------------------------------------------------------------
+// Checking one object against its tables.
+// ------------------------------------------------------------------------------------------------
+
+/// A checked JSON object: its valid values with defaults filled in, and what the file wrote.
+struct Obj {
+  std::string path;
+  bool is_object = false;
+  std::map<std::string, json> v;  // valid values and defaults
+  std::set<std::string> given;    // keys written in the file, valid or not
+
+  bool ok(const std::string& k) const { return v.count(k) != 0; }
+  bool has(const std::string& k) const { return given.count(k) != 0; }
+  const json& get(const std::string& k) const { return v.at(k); }
+  double num(const std::string& k, double fallback = 0.0) const {
+    return ok(k) && v.at(k).is_number() ? v.at(k).get<double>() : fallback;
+  }
+  std::string str(const std::string& k, const std::string& fallback = "") const {
+    return ok(k) && v.at(k).is_string() ? v.at(k).get<std::string>() : fallback;
+  }
+  Vec3 vec(const std::string& k) const {
+    Vec3 out{0.0, 0.0, 0.0};
+    if (!ok(k) || !v.at(k).is_array()) return out;
+    const json& a = v.at(k);
+    for (std::size_t d = 0; d < a.size() && d < 3; ++d) out[d] = a[d].get<double>();
+    return out;
+  }
+  std::string at(const std::string& k) const { return path + "/" + escape(k); }
+};
+
+bool check_value(Ctx& c, const Key& k, const json& v, const std::string& path) {
+  switch (k.type) {
+    case Type::number:
+      if (v.is_number() && k.range.contains(v.get<double>())) return true;
+      break;
+    case Type::integer:
+      if (is_integral(v) && k.range.contains(v.get<double>())) return true;
+      break;
+    case Type::boolean:
+      if (v.is_boolean()) return true;
+      break;
+    case Type::string:
+      if (v.is_string() && !v.get_ref<const std::string&>().empty()) return true;
+      break;
+    case Type::choice:
+      if (v.is_string() && contains(k.values, v.get<std::string>())) return true;
+      if (v.is_string()) {
+        c.error(path, "got " + shown(v) + ", expected " + expected(k, c) +
+                          did_you_mean(v.get<std::string>(), k.values));
+        return false;
+      }
+      break;
+    case Type::vector:
+      if (v.is_array() && std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number(); })) {
+        if (dim_ok(c, v.size())) return true;
+        c.error(path, "got " + shown(v) + " (" + std::to_string(v.size()) + " components), expected " +
+                          expected(k, c));
+        return false;
+      }
+      break;
+    case Type::object:
+      if (v.is_object()) return true;
+      break;
+    case Type::objects:
+      if (v.is_array() && !(k.nonempty && v.empty())) return true;
+      break;
+    case Type::choices: {
+      if (!v.is_array() || v.empty()) break;
+      bool ok = true;
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        const json& e = v[i];
+        if (e.is_string() && contains(k.values, e.get<std::string>())) continue;
+        ok = false;
+        c.error(item(path, i), "got " + shown(e) + ", expected one of: " + join(k.values) +
+                                   (e.is_string() ? did_you_mean(e.get<std::string>(), k.values) : ""));
+      }
+      return ok;
+    }
+    case Type::custom:
+      return k.check(c, v, path, k);
+  }
+  report(c, v, path, k);
+  return false;
+}
+
+std::string unknown_key_message(const std::string& name, const std::vector<const Key*>& keys) {
+  std::vector<std::string> names;
+  for (const Key* k : keys) names.push_back(k->name);
+  if (const auto c = closest(name, names)) {
+    return "unknown key " + quoted(name) + ", did you mean " + quoted(*c) + "?";
+  }
+  return "unknown key " + quoted(name) + ", expected one of: " + join(names);
+}
+
+/// Checks `j` against the union of `tables`. With report_unknown false, keys not in the tables are
+/// passed over (used when the tables themselves are unknown, e.g. a material with a bad model).
+Obj check_object(Ctx& c, const json& j, const std::string& path,
+                 const std::vector<const Table*>& tables, bool report_unknown = true) {
+  Obj o;
+  o.path = path;
+  if (!j.is_object()) {
+    c.error(path, "got " + shown(j) + ", expected an object");
+    return o;
+  }
+  o.is_object = true;
+  std::vector<const Key*> keys;
+  for (const Table* t : tables) {
+    for (const Key& k : t->keys) keys.push_back(&k);
+  }
+  auto find = [&](const std::string& n) -> const Key* {
+    for (const Key* k : keys) {
+      if (k->name == n) return k;
+    }
+    return nullptr;
+  };
+  for (const auto& [name, value] : j.items()) {
+    o.given.insert(name);
+    const Key* k = find(name);
+    if (k == nullptr) {
+      if (report_unknown) c.error(o.at(name), unknown_key_message(name, keys));
+      continue;
+    }
+    if (check_value(c, *k, value, o.at(name))) o.v[name] = value;
+  }
+  for (const Key* k : keys) {
+    if (j.contains(k->name)) continue;
+    if (k->required) {
+      c.error(o.at(k->name), "missing required key, expected " + expected(*k, c));
+    } else if (!k->def.is_null()) {
+      o.v[k->name] = k->def;
+    }
+  }
+  return o;
+}
+
+// ------------------------------------------------------------------------------------------------
+// The section parsers: typed values out of checked objects, and the rules across keys.
+// ------------------------------------------------------------------------------------------------
+
+/// Axis-aligned bounds of a geometry [m].
+struct Bounds {
+  Vec3 min{0, 0, 0}, max{0, 0, 0};
+};
+
+class SceneParser {
+ public:
+  SceneParser(const json& root, const std::string& label) : root_(root) { c_.label = label; }
+
+  Scene parse() {
+    s_.source_file = c_.label;
+    if (!root_.is_object()) {
+      c_.error("", "got " + shown(root_) + ", expected a JSON object (the scene)");
+      throw SceneError(c_.errors);
+    }
+    // The dimension first: every vector's length depends on it.
+    const json* dim = root_.contains("dimension") ? &root_["dimension"] : nullptr;
+    if (dim != nullptr && is_integral(*dim) && (*dim == 2 || *dim == 3)) c_.dim = dim->get<int>();
+
+    const Obj top = check_object(c_, root_, "", {&scene_table()});
+    s_.name = top.str("name");
+    s_.dimension = c_.dim == 0 ? 2 : c_.dim;
+    s_.gravity = top.vec("gravity");
+    s_.gravity_ramp = top.num("gravity_ramp");
+
+    if (top.ok("grid")) parse_grid(top.get("grid"), top.at("grid"));
+    if (top.ok("materials")) parse_materials(top.get("materials"), top.at("materials"));
+    if (top.ok("bodies")) parse_bodies(top.get("bodies"), top.at("bodies"));
+    if (top.ok("boundaries")) parse_boundaries(top.get("boundaries"), top.at("boundaries"));
+    if (top.ok("loads")) parse_loads(top.get("loads"), top.at("loads"));
+    if (top.ok("time")) parse_time(top.get("time"), top.at("time"));
+    parse_output(top.ok("output") ? top.get("output") : json::object(), top.at("output"));
+    parse_solver(top.ok("solver") ? top.get("solver") : json::object(), top.at("solver"));
+    if (top.ok("formulation")) resolve_formulation(top.str("formulation"), top.at("formulation"));
+
+    if (!c_.errors.empty()) {
+      std::vector<std::string> unique;
+      for (const auto& e : c_.errors) {
+        if (!contains(unique, e)) unique.push_back(e);
+      }
+      throw SceneError(unique);
+    }
+    return s_;
+  }
+
+ private:
+  struct MaterialInfo {
+    std::string path;
+    bool known = false;  // model known (parameters checked)
+    bool gives_density = false, gives_grain_density = false, gives_porosity = false;
+    bool gives_permeability = false;
+    bool saturated_reported = false;
+  };
+
+  Ctx c_;
+  const json& root_;
+  Scene s_;
+  bool grid_ok_ = false;
+  Vec3 grid_min_{0, 0, 0}, grid_max_{0, 0, 0};  // as written (before rounding up) [m]
+  std::vector<MaterialInfo> material_info_;
+  std::vector<std::string> body_paths_;
+
+  int dim() const { return s_.dimension; }
+
+  /// Face names of this scene's dimension.
+  std::vector<std::string> faces() const {
+    std::vector<std::string> f(face_names().begin(), face_names().begin() + (dim() == 3 ? 6 : 4));
+    return f;
+  }
+
+  bool check_face(const std::string& face, const std::string& path) {
+    if (contains(faces(), face)) return true;
+    c_.error(path, "got " + quoted(face) + ", expected one of: " + join(faces()) +
+                       " (z faces exist only in 3D scenes)");
+    return false;
+  }
+
+  /// `max` > `min` in every component; reports at `max_path`.
+  bool check_min_max(const Vec3& mn, const Vec3& mx, const std::string& max_path) {
+    for (int d = 0; d < dim(); ++d) {
+      const auto i = static_cast<std::size_t>(d);
+      if (!(mx[i] > mn[i])) {
+        c_.error(max_path, "got " + fmt_vec(mx, dim()) + ", expected every component > min " +
+                               fmt_vec(mn, dim()) + " [m]");
+        return false;
+      }
+    }
+    return true;
+  }
+
+  // -- grid -----------------------------------------------------------------------------------
+
+  void parse_grid(const json& j, const std::string& path) {
+    const Obj g = check_object(c_, j, path, {&grid_table()});
+    Grid& grid = s_.grid;
+    grid.cell_size = g.num("cell_size");
+    grid.min = g.vec("min");
+    grid.max = g.vec("max");
+    grid.shape_function =
+        from_string(kShapeFunctions, g.str("shape_function")).value_or(ShapeFunction::gimp);
+    if (!g.ok("min") || !g.ok("max") || !check_min_max(grid.min, grid.max, g.at("max"))) return;
+    grid_ok_ = true;
+    grid_min_ = grid.min;
+    grid_max_ = grid.max;
+    if (!g.ok("cell_size")) return;
+    // An extent that is not a whole number of cells is rounded up: the grid grows past `max` to the
+    // next cell boundary (documented in docs/scene-format.md).
+    for (int d = 0; d < dim(); ++d) {
+      const auto i = static_cast<std::size_t>(d);
+      const double cells = (grid.max[i] - grid.min[i]) / grid.cell_size;
+      if (std::abs(cells - std::round(cells)) > 1e-9 * std::max(1.0, cells)) {
+        grid.max[i] = grid.min[i] + std::ceil(cells) * grid.cell_size;
+      }
+    }
+  }
+
+  // -- materials ------------------------------------------------------------------------------
+
+  void parse_materials(const json& arr, const std::string& path) {
+    std::map<std::string, std::string> first;  // name -> path
+    for (std::size_t i = 0; i < arr.size(); ++i) {
+      const std::string p = item(path, i);
+      const json& j = arr[i];
+      std::optional<MaterialModel> model;
+      if (j.is_object() && j.contains("model") && j["model"].is_string()) {
+        model = from_string(kModels, j["model"].get<std::string>());
+      }
+      std::vector<const Table*> tables{&material_table()};
+      if (model) {
+        for (const Table* t : model_tables(*model)) tables.push_back(t);
+      }
+      const Obj o = check_object(c_, j, p, tables, model.has_value());
+
+      Material m;
+      m.name = o.str("name");
+      m.model = model.value_or(MaterialModel::linear_elastic);
+      for (const Table* t : tables) {
+        for (const Key& k : t->keys) {
+          if (k.type == Type::number && o.ok(k.name)) m.params[k.name] = o.get(k.name).get<double>();
+        }
+      }
+      if (model && *model != MaterialModel::fluid) m.permeability_law = o.str("permeability_law", "constant");
+
+      MaterialInfo info;
+      info.path = p;
+      info.known = model.has_value();
+      info.gives_density = o.has("density");
+      info.gives_grain_density = o.has("grain_density");
+      info.gives_porosity = o.has("porosity");
+      info.gives_permeability = o.has("hydraulic_conductivity") || o.has("intrinsic_permeability");
+      if (model && *model != MaterialModel::fluid && o.is_object) check_solid_material(o, m);
+
+      if (!m.name.empty()) {
+        if (first.count(m.name) != 0) {
+          c_.error(o.at("name"), "got " + quoted(m.name) + " again (also " + first[m.name] +
+                                     "), expected unique material names");
+        } else {
+          first[m.name] = o.at("name");
+        }
+      }
+      s_.materials.push_back(m);
+      material_info_.push_back(info);
+    }
+  }
+
+  void check_solid_material(const Obj& o, const Material& m) {
+    const std::string either =
+        "\"density\" (a dry body) or \"grain_density\" with \"porosity\" (a porous skeleton)";
+    if (o.has("density") && o.has("grain_density")) {
+      c_.error(o.at("grain_density"), "got both \"density\" and \"grain_density\", expected one of " + either);
+    } else if (!o.has("density") && !o.has("grain_density")) {
+      c_.error(o.at("density"), "missing, expected " + either + " [kg/m^3]");
+    } else if (o.has("grain_density") && !o.has("porosity")) {
+      c_.error(o.at("porosity"), "missing, expected \"porosity\" together with \"grain_density\" [-]");
+    }
+    if (o.has("hydraulic_conductivity") && o.has("intrinsic_permeability")) {
+      c_.error(o.at("intrinsic_permeability"),
+               "got both \"hydraulic_conductivity\" and \"intrinsic_permeability\", expected at most one");
+    }
+    if (m.has("friction_angle") && m.has("dilation_angle") && m.at("dilation_angle") > m.at("friction_angle")) {
+      c_.error(o.at("dilation_angle"), "got " + fmt_g(m.at("dilation_angle")) +
+                                           ", expected a number in [0, friction_angle = " +
+                                           fmt_g(m.at("friction_angle")) + "] [deg]");
+    }
+  }
+
+  std::vector<std::string> material_names(bool fluid) const {
+    std::vector<std::string> out;
+    for (std::size_t i = 0; i < s_.materials.size(); ++i) {
+      const Material& m = s_.materials[i];
+      if (!m.name.empty() && material_info_[i].known && (m.model == MaterialModel::fluid) == fluid) {
+        out.push_back(m.name);
+      }
+    }
+    return out;
+  }
+
+  /// A body's `solid` (fluid = false) or `fluid` reference; returns the material index or -1.
+  int check_material_ref(const Obj& o, const std::string& key, bool fluid) {
+    if (!o.ok(key)) return -1;
+    const std::string name = o.str(key);
+    const int idx = s_.material_index(name);
+    const std::vector<std::string> wanted = material_names(fluid);
+    const std::string kind = fluid ? "a fluid material (model \"fluid\")" : "a solid material";
+    if (idx < 0) {
+      std::vector<std::string> all;
+      for (const auto& m : s_.materials) {
+        if (!m.name.empty()) all.push_back(m.name);
+      }
+      c_.error(o.at(key), "got " + quoted(name) + ", no material has that name; expected " + kind +
+                              " (defined: " + (all.empty() ? std::string("none") : join(all)) + ")" +
+                              did_you_mean(name, all));
+      return -1;
+    }
+    const auto i = static_cast<std::size_t>(idx);
+    if (!material_info_[i].known) return -1;  // its own model error was reported
+    if ((s_.materials[i].model == MaterialModel::fluid) != fluid) {
+      c_.error(o.at(key), "got " + quoted(name) + ", a material of model \"" +
+                              to_string(s_.materials[i].model) + "\"; expected " + kind + " (" +
+                              (fluid ? "fluids" : "solids") + ": " +
+                              (wanted.empty() ? std::string("none") : join(wanted)) + ")");
+      return -1;
+    }
+    return idx;
+  }
+
+  // -- bodies ---------------------------------------------------------------------------------
+
+  void parse_bodies(const json& arr, const std::string& path) {
+    std::map<std::string, std::string> first;
+    for (std::size_t i = 0; i < arr.size(); ++i) {
+      const std::string p = item(path, i);
+      const Obj o = check_object(c_, arr[i], p, {&body_table()});
+      Body b;
+      b.name = o.str("name");
+      b.solid = o.str("solid");
+      b.fluid = o.str("fluid");
+      b.particles_per_cell = static_cast<int>(o.num("particles_per_cell", 2.0));
+      if (o.is_object && !o.has("solid") && !o.has("fluid")) {
+        c_.error(p, "body " + quoted(b.name) +
+                        " has neither \"solid\" nor \"fluid\", expected at least one material name");
+      }
+      const int solid = check_material_ref(o, "solid", false);
+      check_material_ref(o, "fluid", true);
+      if (solid >= 0 && !b.fluid.empty()) check_saturated_solid(static_cast<std::size_t>(solid), b, p);
+
+      if (o.ok("geometry")) {
+        if (const auto bounds = parse_geometry(o.get("geometry"), o.at("geometry"), b.geometry)) {
+          check_inside_grid(*bounds, o.at("geometry"));
+        }
+      }
+      parse_initial(o.ok("initial") ? o.get("initial") : json::object(), o.at("initial"), b);
+
+      if (!b.name.empty()) {
+        if (first.count(b.name) != 0) {
+          c_.error(o.at("name"), "got " + quoted(b.name) + " again (also " + first[b.name] +
+                                     "), expected unique body names");
+        } else {
+          first[b.name] = o.at("name");
+        }
+      }
+      s_.bodies.push_back(b);
+      body_paths_.push_back(p);
+    }
+  }
+
+  /// The solid of a saturated body is a porous skeleton with a permeability. Reported once per
+  /// material, at the material.
+  void check_saturated_solid(std::size_t idx, const Body& b, const std::string& body_path) {
+    MaterialInfo& info = material_info_[idx];
+    if (info.saturated_reported) return;
+    const std::string used = "material " + quoted(s_.materials[idx].name) +
+                             " is the solid of saturated body " + quoted(b.name) + " (" + body_path + ")";
+    if (!info.gives_grain_density || !info.gives_porosity) {
+      c_.error(info.path, used + ", expected \"grain_density\" and \"porosity\" (a porous skeleton)" +
+                              (info.gives_density ? " instead of \"density\"" : ""));
+      info.saturated_reported = true;
+    }
+    if (!info.gives_permeability) {
+      c_.error(info.path, used + ", expected \"hydraulic_conductivity\" or \"intrinsic_permeability\"");
+      info.saturated_reported = true;
+    }
+  }
+
+  std::optional<Bounds> parse_geometry(const json& j, const std::string& path, Geometry& g) {
+    g.raw = j;
+    const std::string type = j.contains("type") && j["type"].is_string() ? j["type"].get<std::string>() : "";
+    const bool implemented = contains(implemented_geometry_types(), type);
+    const bool usable = implemented && !(type == "polygon" && dim() == 3);
+    std::vector<const Table*> tables{&geometry_table()};
+    if (usable) tables.push_back(type == "box" ? &box_table() : &polygon_table());
+    const Obj o = check_object(c_, j, path, tables, usable);
+    g.type = o.str("type");
+    if (!o.ok("type")) return std::nullopt;
+    if (!implemented) {
+      c_.error(o.at("type"), quoted(type) + " is not implemented yet in this version (available: " +
+                                 join(implemented_geometry_types()) + ")");
+      return std::nullopt;
+    }
+    if (!usable) {
+      c_.error(o.at("type"), "got \"polygon\" in a 3D scene, expected \"box\" (polygon is 2D only)");
+      return std::nullopt;
+    }
+    if (type == "box") {
+      g.min = o.vec("min");
+      g.max = o.vec("max");
+      if (!o.ok("min") || !o.ok("max") || !check_min_max(g.min, g.max, o.at("max"))) return std::nullopt;
+      return Bounds{g.min, g.max};
+    }
+    // polygon
+    if (!o.ok("vertices")) return std::nullopt;
+    Bounds b{{inf, inf, 0}, {-inf, -inf, 0}};
+    double twice_area = 0.0;
+    const json& vs = o.get("vertices");
+    for (std::size_t i = 0; i < vs.size(); ++i) {
+      const std::array<double, 2> v{vs[i][0].get<double>(), vs[i][1].get<double>()};
+      const std::array<double, 2> w{vs[(i + 1) % vs.size()][0].get<double>(),
+                                    vs[(i + 1) % vs.size()][1].get<double>()};
+      g.vertices.push_back(v);
+      twice_area += v[0] * w[1] - w[0] * v[1];  // shoelace
+      for (std::size_t d = 0; d < 2; ++d) {
+        b.min[d] = std::min(b.min[d], v[d]);
+        b.max[d] = std::max(b.max[d], v[d]);
+      }
+    }
+    const double scale = std::max(b.max[0] - b.min[0], b.max[1] - b.min[1]);
+    if (!(std::abs(twice_area) > 1e-12 * scale * scale)) {
+      c_.error(o.at("vertices"), "got a polygon of zero area, expected at least 3 vertices enclosing an area");
+      return std::nullopt;
+    }
+    return b;
+  }
+
+  void check_inside_grid(const Bounds& b, const std::string& path) {
+    if (!grid_ok_) return;
+    for (int d = 0; d < dim(); ++d) {
+      const auto i = static_cast<std::size_t>(d);
+      const double tol = 1e-9 * (grid_max_[i] - grid_min_[i]);
+      if (b.min[i] < grid_min_[i] - tol || b.max[i] > grid_max_[i] + tol) {
+        c_.error(path, "got bounds " + fmt_vec(b.min, dim()) + ".." + fmt_vec(b.max, dim()) +
+                           ", expected a geometry inside the grid " + fmt_vec(grid_min_, dim()) + ".." +
+                           fmt_vec(grid_max_, dim()) + " [m]");
+        return;
+      }
+    }
+  }
+
+  void parse_initial(const json& j, const std::string& path, Body& b) {
+    const Obj o = check_object(c_, j, path, {&initial_table()});
+    InitialState& in = b.initial;
+    if (o.ok("pore_pressure")) {
+      const json& pp = o.get("pore_pressure");
+      if (pp.is_number()) in.pore_pressure = pp.get<double>();
+      else in.hydrostatic = true;
+      if (b.fluid.empty()) {
+        c_.error(o.at("pore_pressure"), "got " + shown(pp) + " for body " + quoted(b.name) +
+                                            " without a fluid, expected no pore_pressure (or a body \"fluid\")");
+      }
+    }
+    if (o.has("water_table") && !in.hydrostatic) {
+      c_.error(o.at("water_table"), "got " + shown(j["water_table"]) +
+                                        ", expected no water_table unless pore_pressure is \"hydrostatic\"");
+    } else if (o.ok("water_table")) {
+      in.water_table = o.num("water_table");
+    }
+    if (o.ok("stress")) {
+      const json& st = o.get("stress");
+      if (st.is_string()) {
+        in.geostatic = true;
+      } else {
+        std::array<double, 6> voigt{};
+        for (std::size_t k = 0; k < 6; ++k) voigt[k] = st[k].get<double>();
+        in.stress = voigt;
+      }
+    }
+    if (o.has("k0") && !in.geostatic) {
+      c_.error(o.at("k0"), "got " + shown(j["k0"]) + ", expected no k0 unless stress is \"geostatic\"");
+    }
+    in.k0 = o.num("k0", 0.5);
+    if (o.ok("porosity")) in.porosity = o.num("porosity");
+    if (o.ok("velocity")) {
+      const json& v = o.get("velocity");
+      for (std::size_t d = 0; d < v.size() && d < 3; ++d) {
+        in.velocity[d] = v[d].is_number() ? v[d].dump() : v[d].get<std::string>();
+      }
+    }
+  }
+
+  // -- boundaries and loads --------------------------------------------------------------------
+
+  void parse_boundaries(const json& arr, const std::string& path) {
+    std::map<std::string, std::string> first;
+    for (std::size_t i = 0; i < arr.size(); ++i) {
+      const Obj o = check_object(c_, arr[i], item(path, i), {&boundary_table()});
+      Boundary bc;
+      bc.on = o.str("on");
+      if (o.ok("on") && check_face(bc.on, o.at("on"))) {
+        if (first.count(bc.on) != 0) {
+          c_.error(o.at("on"), "got " + quoted(bc.on) + " again (also " + first[bc.on] +
+                                   "), expected each face at most once");
+        } else {
+          first[bc.on] = o.at("on");
+        }
+      }
+      const auto& solids = solid_bc_names();
+      const auto s = std::find(solids.begin(), solids.end(), o.str("solid", "free"));
+      bc.solid = static_cast<SolidBc>(s - solids.begin());
+      const bool friction = o.ok("solid") && bc.solid == SolidBc::friction;
+      if (friction && !o.has("coefficient")) {
+        c_.error(o.at("coefficient"), "missing, expected a non-negative number with solid \"friction\" [-]");
+      } else if (o.has("coefficient") && o.ok("solid") && !friction) {
+        c_.error(o.at("coefficient"), "got " + shown(arr[i]["coefficient"]) +
+                                          ", expected no coefficient unless solid is \"friction\"");
+      }
+      bc.coefficient = o.num("coefficient");
+      if (o.ok("fluid")) {
+        const auto& fluids = fluid_bc_names();
+        bc.fluid = static_cast<FluidBc>(std::find(fluids.begin(), fluids.end(), o.str("fluid")) - fluids.begin());
+        if (!s_.has_fluid()) {
+          c_.error(o.at("fluid"), "got " + quoted(o.str("fluid")) +
+                                      ", but the scene has no fluid phase (no body has a \"fluid\"); "
+                                      "expected no fluid condition");
+        }
+      }
+      const bool pressure = bc.fluid == FluidBc::pressure;
+      if (pressure && !o.has("value")) {
+        c_.error(o.at("value"), "missing, expected a number with fluid \"pressure\" [Pa]");
+      } else if (o.has("value") && !pressure && (o.ok("fluid") || !o.has("fluid"))) {
+        c_.error(o.at("value"), "got " + shown(arr[i]["value"]) +
+                                    ", expected no value unless fluid is \"pressure\"");
+      }
+      bc.fluid_value = o.num("value");
+      s_.boundaries.push_back(bc);
+    }
+  }
+
+  void parse_loads(const json& arr, const std::string& path) {
+    std::vector<std::string> bodies;
+    for (const auto& b : s_.bodies) {
+      if (!b.name.empty()) bodies.push_back(b.name);
+    }
+    for (std::size_t i = 0; i < arr.size(); ++i) {
+      const Obj o = check_object(c_, arr[i], item(path, i), {&load_table()});
+      Load l;
+      l.type = o.str("type");
+      l.body = o.str("body");
+      l.face = o.str("face");
+      if (o.ok("body") && !contains(bodies, l.body)) {
+        c_.error(o.at("body"), "got " + quoted(l.body) + ", expected the name of a body (defined: " +
+                                   (bodies.empty() ? std::string("none") : join(bodies)) + ")" +
+                                   did_you_mean(l.body, bodies));
+      }
+      if (o.ok("face")) check_face(l.face, o.at("face"));
+      if (o.ok("value") && o.ok("type")) {
+        const json& v = o.get("value");
+        if (l.type == "traction" && !v.is_array()) {
+          c_.error(o.at("value"), "got " + shown(v) + ", expected " + vector_phrase(c_.dim) +
+                                      " for a traction [Pa]");
+        } else if (l.type == "pressure" && !v.is_number()) {
+          c_.error(o.at("value"), "got " + shown(v) + ", expected a number for a pressure [Pa]");
+        } else if (v.is_number()) {
+          l.value[0] = v.get<double>();
+        } else {
+          l.value = o.vec("value");
+        }
+      }
+      if (o.ok("region")) {
+        const Obj r = check_object(c_, o.get("region"), o.at("region"), {&region_table()});
+        if (r.ok("min") && r.ok("max") && check_min_max(r.vec("min"), r.vec("max"), r.at("max"))) {
+          l.region = std::make_pair(r.vec("min"), r.vec("max"));
+        }
+      }
+      l.function.ramp = o.num("ramp");
+      if (o.has("function") && o.has("table")) {
+        c_.error(o.at("table"), "got both \"function\" and \"table\", expected at most one of them");
+      }
+      l.function.expression = o.str("function");
+      if (o.ok("table")) {
+        for (const json& p : o.get("table")) l.function.table.push_back({p[0].get<double>(), p[1].get<double>()});
+      }
+      s_.loads.push_back(l);
+    }
+  }
+
+  // -- time, output, solver --------------------------------------------------------------------
+
+  void parse_time(const json& j, const std::string& path) {
+    const Obj o = check_object(c_, j, path, {&time_table()});
+    s_.time.end = o.num("end");
+    if (o.ok("dt") && o.get("dt").is_number()) s_.time.dt = o.num("dt");
+    s_.time.cfl = o.num("cfl", 0.5);
+  }
+
+  void parse_output(const json& j, const std::string& path) {
+    const Obj o = check_object(c_, j, path, {&output_table()});
+    s_.output.interval = o.num("interval");
+    s_.output.monitor_interval = o.num("monitor_interval");
+    if (!o.ok("monitors")) return;
+    const json& arr = o.get("monitors");
+    std::map<std::string, std::string> first;
+    for (std::size_t i = 0; i < arr.size(); ++i) {
+      const Obj m = check_object(c_, arr[i], item(o.at("monitors"), i), {&monitor_table()});
+      Monitor mon;
+      mon.name = m.str("name");
+      if (m.ok("at")) mon.at = m.vec("at");
+      if (m.ok("particle")) mon.particle = static_cast<long>(m.get("particle").get<double>());
+      mon.phase = m.str("phase", "solid");
+      if (m.has("at") && m.has("particle")) {
+        c_.error(m.at("particle"), "got both \"at\" and \"particle\", expected one of them "
+                                   "(or neither, for a global monitor)");
+      }
+      const bool global = !m.has("at") && !m.has("particle");
+      if (mon.phase == "fluid" && !s_.has_fluid()) {
+        c_.error(m.at("phase"), "got \"fluid\", but the scene has no fluid phase (no body has a "
+                                "\"fluid\"); expected \"solid\"");
+      }
+      if (mon.at && grid_ok_) {
+        for (int d = 0; d < dim(); ++d) {
+          const auto k = static_cast<std::size_t>(d);
+          if ((*mon.at)[k] < grid_min_[k] || (*mon.at)[k] > grid_max_[k]) {
+            c_.error(m.at("at"), "got " + fmt_vec(*mon.at, dim()) + ", expected a point inside the grid " +
+                                     fmt_vec(grid_min_, dim()) + ".." + fmt_vec(grid_max_, dim()) + " [m]");
+            break;
+          }
+        }
+      }
+      if (m.ok("quantities")) {
+        const json& qs = m.get("quantities");
+        for (std::size_t k = 0; k < qs.size(); ++k) {
+          const std::string q = qs[k].get<std::string>();
+          const std::string qp = item(m.at("quantities"), k);
+          check_quantity(q, global, qp);
+          if (contains(mon.quantities, q)) {
+            c_.error(qp, "got " + quoted(q) + " twice, expected each quantity at most once");
+          }
+          mon.quantities.push_back(q);
+        }
+      }
+      if (!mon.name.empty()) {
+        if (first.count(mon.name) != 0) {
+          c_.error(m.at("name"), "got " + quoted(mon.name) + " again (also " + first[mon.name] +
+                                     "), expected unique monitor names");
+        } else {
+          first[mon.name] = m.at("name");
+        }
+      }
+      s_.output.monitors.push_back(mon);
+    }
+  }
+
+  void check_quantity(const std::string& q, bool global, const std::string& path) {
+    const bool is_global = contains(global_quantities(), q);
+    if (global && !is_global) {
+      c_.error(path, "got " + quoted(q) + ", a point quantity, but the monitor has neither \"at\" nor "
+                     "\"particle\"; expected \"at\" or \"particle\", or a global quantity (" +
+                         join(global_quantities()) + ")");
+    } else if (!global && is_global) {
+      c_.error(path, "got " + quoted(q) + ", a global quantity, expected a point quantity (global "
+                     "quantities belong to a monitor without \"at\" and \"particle\")");
+    }
+    if (dim() == 2 && is_3d_only_quantity(q)) {
+      c_.error(path, "got " + quoted(q) + " in a 2D scene, expected a quantity without a z component "
+                     "(z components exist only in 3D; stress_zz is the plane-strain out-of-plane stress)");
+    }
+    if (needs_fluid_quantity(q) && !s_.has_fluid()) {
+      c_.error(path, "got " + quoted(q) + ", but the scene has no fluid phase (no body has a \"fluid\"); "
+                     "expected a solid quantity");
+    }
+  }
+
+  void parse_solver(const json& j, const std::string& path) {
+    const Obj o = check_object(c_, j, path, {&solver_table()});
+    Solver& sv = s_.solver;
+    sv.flip = o.num("flip", 0.99);
+    sv.damping = o.num("damping");
+    sv.kinematics = o.str("kinematics", "finite-strain");
+    sv.checkpoint_every = static_cast<int>(o.num("checkpoint_every", 50.0));
+    const Obj st = check_object(c_, o.ok("stabilisation") ? o.get("stabilisation") : json::object(),
+                                o.at("stabilisation"), {&stabilisation_table()});
+    sv.stabilisation.strain_smoothing = st.ok("strain_smoothing") ? st.get("strain_smoothing").get<bool>() : true;
+    sv.stabilisation.pressure = st.str("pressure", "none");
+    sv.stabilisation.fbar = st.str("fbar", "none");
+  }
+
+  // -- formulation -----------------------------------------------------------------------------
+
+  void resolve_formulation(const std::string& name, const std::string& path) {
+    const Formulation f = from_string(kFormulations, name).value_or(Formulation::automatic);
+    std::string fluid_body, fluid_body_path;
+    for (std::size_t i = 0; i < s_.bodies.size(); ++i) {
+      if (!s_.bodies[i].fluid.empty()) {
+        fluid_body = s_.bodies[i].name;
+        fluid_body_path = body_paths_[i];
+        break;
+      }
+    }
+    const bool fluid = !fluid_body_path.empty();
+    if (f == Formulation::automatic) {
+      s_.formulation = fluid ? Formulation::explicit_single_point : Formulation::dry;
+      s_.formulation_reason =
+          fluid ? "body \"" + fluid_body + "\" has a fluid, so the scene is coupled soil-water; \"auto\" "
+                  "picks \"explicit-single-point\", the general explicit coupled scheme"
+                : "no body has a fluid, so the scene is dry; \"auto\" picks \"dry\" (solid phase only)";
+      return;
+    }
+    s_.formulation = f;
+    s_.formulation_reason = quoted(name) + " as named in the scene file";
+    if (f == Formulation::dry && fluid) {
+      c_.error(path, "got \"dry\", but body " + quoted(fluid_body) + " (" + fluid_body_path +
+                         ") has a fluid; expected a coupled formulation (e.g. \"explicit-single-point\") "
+                         "or \"auto\"");
+    } else if (f != Formulation::dry && !fluid) {
+      c_.error(path, "got " + quoted(name) + ", but no body has a fluid; expected \"dry\" (or \"auto\")");
+    }
+  }
+};
+
+// ------------------------------------------------------------------------------------------------
+// Writing a scene back.
+// ------------------------------------------------------------------------------------------------
+
+json vec_json(const Vec3& v, int dim) {
+  json a = json::array();
+  for (int d = 0; d < dim; ++d) a.push_back(v[static_cast<std::size_t>(d)]);
+  return a;
+}
+
+std::string markdown_default(const Key& k) {
+  if (k.required) return "required";
+  if (!k.default_text.empty()) return k.default_text;
+  if (!k.def.is_null()) return "`" + k.def.dump() + "`";
+  return "—";
+}
+
+std::string markdown_type(const Key& k) {
+  if (!k.type_text.empty()) return k.type_text;
+  switch (k.type) {
+    case Type::number: return "number";
+    case Type::integer: return "integer";
+    case Type::boolean: return "boolean";
+    case Type::string: return "string";
+    case Type::choice: return "string";
+    case Type::vector: return "vector";
+    case Type::object: return "object";
+    case Type::objects: return "array of objects";
+    case Type::choices: return "array of strings";
+    case Type::custom: return "see meaning";
+  }
+  return "";
+}
+
+std::string markdown_allowed(const Key& k) {
+  if (!k.allowed.empty()) return k.allowed;
+  switch (k.type) {
+    case Type::number: return range_text(k.range, false);
+    case Type::integer: return range_text(k.range, true);
+    case Type::boolean: return "`true`, `false`";
+    case Type::choice:
+    case Type::choices: {
+      std::vector<std::string> v;
+      for (const auto& s : k.values) v.push_back("`" + s + "`");
+      return join(v);
+    }
+    case Type::vector: return "`dimension` numbers";
+    case Type::objects: return k.nonempty ? "≥ 1 entry" : "";
+    default: return "";
+  }
+}
+
+}  // namespace
+
+Scene parse_scene(const nlohmann::json& j, const std::string& label) {
+  return SceneParser(j, label).parse();
+}
+
+Scene load_scene(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw SceneError({path + ": cannot read the scene file (" + std::strerror(errno) + ")"});
+  }
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  if (in.bad()) throw SceneError({path + ": cannot read the scene file"});
+  const std::string text = buf.str();
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    // Line and column of the byte where parsing failed (e.byte is 1-based).
+    const std::size_t byte = e.byte == 0 ? 0 : e.byte - 1;
+    std::size_t line = 1, column = 1;
+    for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
+      if (text[i] == '\n') ++line, column = 1;
+      else ++column;
+    }
+    std::string why = e.what();
+    const auto at = why.find(": ", why.find("parse error"));
+    if (at != std::string::npos) why = why.substr(at + 2);
+    throw SceneError({path + ": invalid JSON at line " + std::to_string(line) + ", column " +
+                      std::to_string(column) + " (byte " + std::to_string(e.byte) + "): " + why});
+  }
+  return parse_scene(j, path);
+}
+
+nlohmann::json to_json(const Scene& s) {
+  const int dim = s.dimension;
+  json j;
+  j["name"] = s.name;
+  j["dimension"] = dim;
+  j["formulation"] = to_string(s.formulation);
+  j["gravity"] = vec_json(s.gravity, dim);
+  j["gravity_ramp"] = s.gravity_ramp;
+  j["grid"] = {{"cell_size", s.grid.cell_size},
+               {"min", vec_json(s.grid.min, dim)},
+               {"max", vec_json(s.grid.max, dim)},
+               {"shape_function", to_string(s.grid.shape_function)}};
+
+  j["materials"] = json::array();
+  for (const Material& m : s.materials) {
+    json mj = {{"name", m.name}, {"model", to_string(m.model)}};
+    for (const auto& [key, value] : m.params) mj[key] = value;
+    if (m.model != MaterialModel::fluid) mj["permeability_law"] = m.permeability_law;
+    j["materials"].push_back(mj);
+  }
+
+  j["bodies"] = json::array();
+  for (const Body& b : s.bodies) {
+    json bj = {{"name", b.name}, {"particles_per_cell", b.particles_per_cell}};
+    const Geometry& g = b.geometry;
+    if (g.type == "box") {
+      bj["geometry"] = {{"type", "box"}, {"min", vec_json(g.min, dim)}, {"max", vec_json(g.max, dim)}};
+    } else if (g.type == "polygon") {
+      json vs = json::array();
+      for (const auto& v : g.vertices) vs.push_back({v[0], v[1]});
+      bj["geometry"] = {{"type", "polygon"}, {"vertices", vs}};
+    } else {
+      bj["geometry"] = g.raw;
+    }
+    if (!b.solid.empty()) bj["solid"] = b.solid;
+    if (!b.fluid.empty()) bj["fluid"] = b.fluid;
+    const InitialState& in = b.initial;
+    json ij = json::object();
+    if (in.hydrostatic) ij["pore_pressure"] = "hydrostatic";
+    else if (in.pore_pressure) ij["pore_pressure"] = *in.pore_pressure;
+    if (in.water_table) ij["water_table"] = *in.water_table;
+    if (in.geostatic) {
+      ij["stress"] = "geostatic";
+      ij["k0"] = in.k0;
+    } else if (in.stress) {
+      ij["stress"] = *in.stress;
+    }
+    if (in.porosity) ij["porosity"] = *in.porosity;
+    ij["velocity"] = json::array();
+    for (int d = 0; d < dim; ++d) ij["velocity"].push_back(in.velocity[static_cast<std::size_t>(d)]);
+    bj["initial"] = ij;
+    j["bodies"].push_back(bj);
+  }
+
+  j["boundaries"] = json::array();
+  for (const Boundary& bc : s.boundaries) {
+    json bj = {{"on", bc.on}, {"solid", solid_bc_names()[static_cast<std::size_t>(bc.solid)]}};
+    if (bc.solid == SolidBc::friction) bj["coefficient"] = bc.coefficient;
+    if (bc.fluid) {
+      bj["fluid"] = fluid_bc_names()[static_cast<std::size_t>(*bc.fluid)];
+      if (*bc.fluid == FluidBc::pressure) bj["value"] = bc.fluid_value;
+    }
+    j["boundaries"].push_back(bj);
+  }
+
+  j["loads"] = json::array();
+  for (const Load& l : s.loads) {
+    json lj = {{"type", l.type}, {"body", l.body}, {"face", l.face}, {"ramp", l.function.ramp}};
+    lj["value"] = l.type == "pressure" ? json(l.value[0]) : vec_json(l.value, dim);
+    if (l.region) lj["region"] = {{"min", vec_json(l.region->first, dim)}, {"max", vec_json(l.region->second, dim)}};
+    if (!l.function.expression.empty()) lj["function"] = l.function.expression;
+    if (!l.function.table.empty()) lj["table"] = l.function.table;
+    j["loads"].push_back(lj);
+  }
+
+  j["time"] = {{"end", s.time.end}, {"cfl", s.time.cfl}};
+  j["time"]["dt"] = s.time.dt ? json(*s.time.dt) : json("auto");
+
+  json monitors = json::array();
+  for (const Monitor& m : s.output.monitors) {
+    json mj = {{"name", m.name}, {"phase", m.phase}, {"quantities", m.quantities}};
+    if (m.at) mj["at"] = vec_json(*m.at, dim);
+    if (m.particle) mj["particle"] = *m.particle;
+    monitors.push_back(mj);
+  }
+  j["output"] = {{"interval", s.output.interval},
+                 {"monitor_interval", s.output.monitor_interval},
+                 {"monitors", monitors}};
+
+  const Solver& sv = s.solver;
+  j["solver"] = {{"flip", sv.flip},
+                 {"damping", sv.damping},
+                 {"kinematics", sv.kinematics},
+                 {"checkpoint_every", sv.checkpoint_every},
+                 {"stabilisation",
+                  {{"strain_smoothing", sv.stabilisation.strain_smoothing},
+                   {"pressure", sv.stabilisation.pressure},
+                   {"fbar", sv.stabilisation.fbar}}}};
+  return j;
+}
+
+std::vector<std::string> schema_keys() {
+  std::set<std::string> keys;
+  for (const Table* t : all_tables()) {
+    for (const Key& k : t->keys) keys.insert(k.name);
+  }
+  return {keys.begin(), keys.end()};
+}
+
+std::string schema_markdown() {
+  std::string out;
+  for (const Table* t : all_tables()) {
+    out += "### " + t->title + "\n\nIn " + t->where + ".\n\n";
+    out += "| key | type | unit | default | allowed | meaning |\n";
+    out += "|---|---|---|---|---|---|\n";
+    for (const Key& k : t->keys) {
+      out += "| `" + k.name + "` | " + markdown_type(k) + " | " + k.unit + " | " + markdown_default(k) +
+             " | " + markdown_allowed(k) + " | " + k.meaning + " |\n";
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+}  // namespace swmpm::scene

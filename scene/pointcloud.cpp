@@ -1,0 +1,140 @@
+#include "scene/pointcloud.hpp"
+
+#include <fstream>
+#include <iomanip>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+namespace swmpm::scene {
+
+const PointArray* PointCloud::find(const std::string& name) const {
+  for (const auto& a : arrays)
+    if (a.name == name) return &a;
+  return nullptr;
+}
+
+const PointArray& PointCloud::get(const std::string& name, const std::string& where) const {
+  if (const auto* a = find(name)) return *a;
+  throw std::runtime_error(where + ": missing point array \"" + name + "\"");
+}
+
+PointArray& PointCloud::add(const std::string& name, int components) {
+  arrays.push_back({name, components, std::vector<double>(points.size() * components, 0.0)});
+  return arrays.back();
+}
+
+void write_vtu(const std::string& path, const PointCloud& cloud) {
+  const auto n = static_cast<vtkIdType>(cloud.size());
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(n);
+  for (vtkIdType i = 0; i < n; ++i) points->SetPoint(i, cloud.points[i].data());
+
+  // One vertex cell per particle, so ParaView shows points without a filter.
+  auto offsets = vtkSmartPointer<vtkIdTypeArray>::New();
+  auto connectivity = vtkSmartPointer<vtkIdTypeArray>::New();
+  offsets->SetNumberOfValues(n + 1);
+  connectivity->SetNumberOfValues(n);
+  for (vtkIdType i = 0; i <= n; ++i) offsets->SetValue(i, i);
+  for (vtkIdType i = 0; i < n; ++i) connectivity->SetValue(i, i);
+  auto cells = vtkSmartPointer<vtkCellArray>::New();
+  cells->SetData(offsets, connectivity);
+
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  grid->SetPoints(points);
+  grid->SetCells(VTK_VERTEX, cells);
+  for (const auto& a : cloud.arrays) {
+    auto arr = vtkSmartPointer<vtkDoubleArray>::New();
+    arr->SetName(a.name.c_str());
+    arr->SetNumberOfComponents(a.components);
+    arr->SetNumberOfTuples(n);
+    std::copy(a.values.begin(), a.values.end(), arr->GetPointer(0));
+    grid->GetPointData()->AddArray(arr);
+  }
+
+  auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
+  writer->SetFileName(path.c_str());
+  writer->SetInputData(grid);
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();  // raw binary
+  writer->SetCompressorTypeToZLib();
+  if (writer->Write() != 1) throw std::runtime_error(path + ": could not write VTU file");
+}
+
+PointCloud read_vtu(const std::string& path) {
+  {
+    std::ifstream probe(path);
+    if (!probe) throw std::runtime_error(path + ": cannot open file");
+  }
+  auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkUnstructuredGrid* grid = reader->GetOutput();
+  if (grid == nullptr || reader->GetErrorCode() != 0)
+    throw std::runtime_error(path + ": not a readable VTU file");
+  PointCloud cloud;
+  const vtkIdType n = grid->GetNumberOfPoints();
+  cloud.points.resize(n);
+  for (vtkIdType i = 0; i < n; ++i) grid->GetPoint(i, cloud.points[i].data());
+  vtkPointData* pd = grid->GetPointData();
+  for (int k = 0; k < pd->GetNumberOfArrays(); ++k) {
+    vtkDataArray* arr = pd->GetArray(k);
+    if (arr == nullptr || arr->GetName() == nullptr) continue;
+    PointArray a{arr->GetName(), arr->GetNumberOfComponents(), {}};
+    a.values.resize(static_cast<std::size_t>(n) * a.components);
+    for (vtkIdType i = 0; i < n; ++i)
+      for (int c = 0; c < a.components; ++c) a.values[i * a.components + c] = arr->GetComponent(i, c);
+    cloud.arrays.push_back(std::move(a));
+  }
+  return cloud;
+}
+
+void write_pvd(const std::string& path, const std::vector<PvdEntry>& entries) {
+  // The PVD collection format is ParaView's; VTK has no writer for it, it is six lines of XML.
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot write file");
+  out << "<?xml version=\"1.0\"?>\n"
+      << "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+      << "  <Collection>\n";
+  out << std::setprecision(17);
+  for (const auto& e : entries)
+    out << "    <DataSet timestep=\"" << e.time << "\" group=\"" << e.group << "\" part=\"" << e.part
+        << "\" file=\"" << e.file << "\"/>\n";
+  out << "  </Collection>\n</VTKFile>\n";
+}
+
+std::vector<PvdEntry> read_pvd(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  static const std::regex dataset(R"(<DataSet\s+([^>]*)/>)");
+  static const std::regex attr(R"((\w+)\s*=\s*"([^"]*)\")");
+  std::vector<PvdEntry> entries;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), dataset); it != std::sregex_iterator(); ++it) {
+    PvdEntry e{0.0, "", 0, ""};
+    const std::string attrs = (*it)[1];
+    for (auto at = std::sregex_iterator(attrs.begin(), attrs.end(), attr); at != std::sregex_iterator(); ++at) {
+      const std::string key = (*at)[1], value = (*at)[2];
+      if (key == "timestep") e.time = std::stod(value);
+      else if (key == "group") e.group = value;
+      else if (key == "part") e.part = std::stoi(value);
+      else if (key == "file") e.file = value;
+    }
+    entries.push_back(e);
+  }
+  return entries;
+}
+
+}  // namespace swmpm::scene

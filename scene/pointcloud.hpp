@@ -1,0 +1,49 @@
+// PointCloud: named particle arrays, and their VTU (VTK XML, binary, compressed) read/write.
+//
+// This is what crosses stage boundaries: preprocess writes particles/<phase>.vtu, the solver
+// reads them and writes output/<phase>_NNNNNN.vtu frames, postprocess reads frames back.
+// Well-known array names are in docs/scene-format.md ("Particle files").
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace swmpm::scene {
+
+struct PointArray {
+  std::string name;
+  int components = 1;          // 1 scalar, 3 vector, 6 symmetric tensor (xx yy zz xy yz xz)
+  std::vector<double> values;  // size = points * components
+};
+
+struct PointCloud {
+  std::vector<std::array<double, 3>> points;  // m
+  std::vector<PointArray> arrays;
+
+  std::size_t size() const { return points.size(); }
+  /// The array of that name, or nullptr.
+  const PointArray* find(const std::string& name) const;
+  /// The array of that name; throws std::runtime_error naming the array and `where`.
+  const PointArray& get(const std::string& name, const std::string& where) const;
+  /// Adds a zero-initialised array and returns it.
+  PointArray& add(const std::string& name, int components);
+};
+
+/// Writes a VTK XML unstructured grid of vertex cells (binary, zlib-compressed).
+void write_vtu(const std::string& path, const PointCloud& cloud);
+/// Reads a .vtu written by write_vtu (or by another tool): every point-data array is returned.
+PointCloud read_vtu(const std::string& path);
+
+/// One entry of a ParaView time series.
+struct PvdEntry {
+  double time;
+  std::string group;  // phase name (solid, fluid)
+  int part = 0;       // block index per phase, as ParaView's PVD reader expects
+  std::string file;   // relative to the .pvd
+};
+void write_pvd(const std::string& path, const std::vector<PvdEntry>& entries);
+/// Entries of a .pvd file (as written by write_pvd).
+std::vector<PvdEntry> read_pvd(const std::string& path);
+
+}  // namespace swmpm::scene

@@ -1,0 +1,198 @@
+// The scene model: the typed contract between the stages (interface.md §2).
+//
+// A scene file is parsed and validated once (scene/parse.cpp) into these structs; physics code
+// receives them as const& and never reads JSON. SI units throughout. Every default and range lives
+// in the schema tables in parse.cpp and is documented in docs/scene-format.md.
+#pragma once
+
+#include <array>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace swmpm::scene {
+
+enum class Formulation {
+  dry,
+  explicit_single_point,
+  semi_implicit_single_point,
+  semi_implicit_double_point,
+  explicit_double_point,
+  mpm_fem,
+  automatic  // "auto": resolved by the parser (see resolve_formulation)
+};
+
+enum class ShapeFunction { linear, gimp, bspline2, bspline3 };
+
+enum class MaterialModel { linear_elastic, hencky, mohr_coulomb, drucker_prager, nor_sand, fluid };
+
+enum class SolidBc { fixed, roller, free, friction };
+enum class FluidBc { impermeable, drained, pressure };
+
+/// Up to three components; only the first `dimension` are meaningful.
+using Vec3 = std::array<double, 3>;
+
+/// A scalar function of time, f(t): constant 1 unless an expression or a table is given,
+/// multiplied by a linear ramp from 0 to 1 over `ramp` seconds when ramp > 0.
+struct TimeFunction {
+  double ramp = 0.0;                          // s
+  std::string expression;                     // muParser expression in t (empty: none)
+  std::vector<std::array<double, 2>> table;   // (t, value) pairs, piecewise linear, clamped
+};
+
+struct Grid {
+  double cell_size = 0.0;       // m
+  Vec3 min{0, 0, 0};            // m
+  Vec3 max{0, 0, 0};            // m
+  ShapeFunction shape_function = ShapeFunction::gimp;
+};
+
+struct Material {
+  std::string name;
+  MaterialModel model = MaterialModel::linear_elastic;
+  /// Every model parameter by its full scene name (youngs_modulus, poisson_ratio, density,
+  /// grain_density, porosity, cohesion, friction_angle, ...), validated against the model's
+  /// parameter table and with defaults filled in. Units as in docs/scene-format.md.
+  std::map<std::string, double> params;
+  std::string permeability_law = "constant";  // "constant" | "kozeny-carman"
+
+  bool has(const std::string& key) const { return params.count(key) != 0; }
+  double at(const std::string& key) const;  // throws std::out_of_range naming the key
+  /// Density of the solid skeleton in the mixture [kg/m^3]: density, or (1-n) grain_density.
+  double solid_bulk_density() const;
+};
+
+struct Geometry {
+  std::string type;             // box | polygon | slope | gmsh | surface-mesh
+  Vec3 min{0, 0, 0}, max{0, 0, 0};            // box [m]
+  std::vector<std::array<double, 2>> vertices;  // polygon (2D), counter-clockwise or clockwise
+  nlohmann::json raw;           // the geometry object as written, for types that need more keys
+};
+
+struct InitialState {
+  std::optional<double> pore_pressure;  // Pa, compression positive
+  bool hydrostatic = false;             // pore_pressure: "hydrostatic"
+  std::optional<double> water_table;    // m (height), with hydrostatic
+  bool geostatic = false;               // stress: "geostatic"
+  double k0 = 0.5;                      // lateral earth pressure coefficient, with geostatic
+  std::optional<std::array<double, 6>> stress;  // Pa, tension positive, Voigt xx yy zz xy yz xz
+  std::optional<double> porosity;       // overrides the material's
+  /// Initial velocity: per component an expression in x, y, z (constants are expressions too).
+  std::array<std::string, 3> velocity{"0", "0", "0"};  // m/s
+};
+
+struct Body {
+  std::string name;
+  Geometry geometry;
+  std::string solid;  // material name, empty when the body has no solid
+  std::string fluid;  // material name, empty when the body has no fluid
+  int particles_per_cell = 2;  // per direction: n^dim particles per cell
+  InitialState initial;
+};
+
+struct Boundary {
+  std::string on;  // x_min .. z_max
+  SolidBc solid = SolidBc::free;
+  double coefficient = 0.0;  // friction coefficient (solid == friction)
+  std::optional<FluidBc> fluid;
+  double fluid_value = 0.0;  // Pa, with fluid == pressure
+};
+
+struct Load {
+  std::string type;   // traction | pressure
+  std::string body;
+  std::string face;   // x_min .. z_max: the body's surface layer facing that way
+  Vec3 value{0, 0, 0};   // traction vector [Pa] (traction) or value[0] = pressure [Pa] (pressure)
+  std::optional<std::pair<Vec3, Vec3>> region;  // limit to particles inside [min, max] at t = 0
+  TimeFunction function;
+};
+
+struct Monitor {
+  std::string name;
+  std::optional<Vec3> at;        // nearest particle of `phase` at t = 0, followed through the run
+  std::optional<long> particle;  // or a particle id
+  std::string phase = "solid";   // solid | fluid
+  std::vector<std::string> quantities;
+};
+
+struct Output {
+  double interval = 0.0;          // s between VTU frames (0: first and last only)
+  double monitor_interval = 0.0;  // s between monitor rows (0: every step)
+  std::vector<Monitor> monitors;
+};
+
+struct Time {
+  double end = 0.0;        // s
+  std::optional<double> dt;  // s; empty = "auto"
+  double cfl = 0.5;        // with dt "auto"
+};
+
+struct Stabilisation {
+  bool strain_smoothing = true;
+  std::string pressure = "none";  // none | mfvp-constant | mfvp-linear | mfvp-quadratic | node-remap
+  std::string fbar = "none";      // none | standard | modified
+};
+
+struct Solver {
+  double flip = 0.99;            // FLIP fraction of the FLIP/PIC blend (1 = pure FLIP)
+  double damping = 0.0;          // local (Cundall) damping coefficient, 0..1
+  std::string kinematics = "finite-strain";  // small-strain | finite-strain
+  Stabilisation stabilisation;
+  int checkpoint_every = 50;     // steps between in-memory snapshots of the last good state
+};
+
+struct Scene {
+  std::string name;
+  int dimension = 2;
+  Formulation formulation = Formulation::dry;
+  std::string formulation_reason;  // why "auto" picked what it picked
+  Vec3 gravity{0, 0, 0};           // m/s^2
+  double gravity_ramp = 0.0;       // s
+  Grid grid;
+  std::vector<Material> materials;
+  std::vector<Body> bodies;
+  std::vector<Boundary> boundaries;
+  std::vector<Load> loads;
+  Time time;
+  Output output;
+  Solver solver;
+  std::string source_file;  // path of the scene file (for relative paths and messages)
+
+  const Material& material(const std::string& name) const;
+  int material_index(const std::string& name) const;
+  bool has_fluid() const;
+};
+
+/// All validation problems of one scene file, one line each:
+/// "scene.json: /materials/1/poisson_ratio: got 0.7, expected a number in [0, 0.5) [-]".
+class SceneError : public std::runtime_error {
+ public:
+  explicit SceneError(std::vector<std::string> lines);
+  const std::vector<std::string>& lines() const { return lines_; }
+
+ private:
+  std::vector<std::string> lines_;
+};
+
+/// Parse and validate a scene file. Throws SceneError listing every problem found.
+Scene load_scene(const std::string& path);
+/// Same, from a JSON value; `label` names the source in messages.
+Scene parse_scene(const nlohmann::json& j, const std::string& label);
+/// The scene with every default filled in, as JSON that parse_scene accepts again.
+nlohmann::json to_json(const Scene& s);
+
+std::string to_string(Formulation f);
+std::string to_string(ShapeFunction f);
+std::string to_string(MaterialModel m);
+
+/// Every key name declared in the scene schema tables (parse.cpp), sorted, without duplicates.
+std::vector<std::string> schema_keys();
+/// The schema tables as Markdown (one table per object kind: key, type, unit, default, allowed,
+/// meaning); docs/scene-format.md contains them verbatim (checked by a unit test).
+std::string schema_markdown();
+
+}  // namespace swmpm::scene

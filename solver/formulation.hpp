@@ -1,0 +1,79 @@
+// The contract between the one time loop (solver/run.cpp) and a formulation.
+//
+// A formulation owns its grid fields and kernels; the loop owns time, loads' clocks, output,
+// monitors, progress and divergence handling. step() advances the state from t to t + dt with the
+// body force of ctx (gravity already ramped) and must report the first particle whose state went
+// bad (non-finite, J <= 0, outside the grid) in `Health` instead of throwing.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "scene/scene.hpp"
+#include "solver/particles/particles.hpp"
+
+namespace swmpm {
+
+struct StepContext {
+  double t = 0.0;   // s, time at the start of the step
+  double dt = 0.0;  // s
+  std::array<double, 3> gravity{0, 0, 0};  // m/s^2, ramp applied
+};
+
+/// Why a step failed: the smallest particle index with a problem, and what it was.
+struct Health {
+  long particle = -1;
+  std::string phase;
+  std::string what;
+  bool ok() const { return particle < 0; }
+  void report(long p, std::string ph, std::string w) {
+    if (p >= 0 && (particle < 0 || p < particle)) {
+      particle = p;
+      phase = std::move(ph);
+      what = std::move(w);
+    }
+  }
+};
+
+template <int Dim>
+struct State {
+  ParticleSet<Dim> solid;
+  double time = 0.0;
+  long step = 0;
+  Health health;
+};
+
+/// Wall time spent in each named stage of step(), for the log and the benchmarks.
+struct StageTimes {
+  std::vector<std::string> names;
+  std::vector<double> seconds;
+  void add(const char* name, double s);
+};
+
+template <int Dim>
+class Formulation {
+ public:
+  virtual ~Formulation() = default;
+  virtual std::string name() const = 0;
+  /// Largest stable dt at the current state (s), and a sentence saying what limits it.
+  virtual double critical_time_step(const State<Dim>& s, std::string& reason) const = 0;
+  virtual void step(State<Dim>& s, const StepContext& ctx) = 0;
+  /// Kinetic and stored elastic energy of the system [J or J/m], summed in a fixed order.
+  virtual double kinetic_energy(const State<Dim>& s) const = 0;
+  virtual double strain_energy(const State<Dim>& s) const = 0;
+  /// Power of body forces and tractions [W or W/m] at the state, with the loads of ctx.
+  virtual double external_power(const State<Dim>& s, const StepContext& ctx) const = 0;
+  /// Cells holding at least one particle, at the last step.
+  virtual std::size_t active_cells(const State<Dim>& s) const = 0;
+  const StageTimes& stage_times() const { return times_; }
+
+ protected:
+  StageTimes times_;
+};
+
+/// The formulation the scene names, for the scene's shape function (chosen here, once).
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_formulation(const scene::Scene& s, const State<Dim>& state);
+
+}  // namespace swmpm

@@ -1,0 +1,172 @@
+// Formulation `dry`: single-phase explicit MPM, MUSL (Sulsky et al. 1995) with a FLIP/PIC blend.
+//
+// One step (each line a named stage, timed):
+//   (1) shape data at x_n, active node box, scatter schedule
+//   (2) P2G: m_i, (mv)_i, f_i = f_int + f_body                 (transfer::scatter_mass_momentum_force)
+//   (3) + tractions on face particles                          (ParticleLoads)
+//   (4) grid: vL_i = (mv)_i / m_i, local damping, v_i = vL_i + dt f_i / m_i, BCs on both
+//   (5) G2P: v_p (FLIP/PIC blend), x_p += dt sum N v_i
+//   (6) MUSL: remap momentum with the new v_p, v_i = (mv)_i / m_i, BCs
+//   (7) L_p = sum v_i (x) grad N_ip; F, V
+//   (8) stress update per material
+#include <omp.h>
+
+#include <limits>
+
+#include "solver/formulation.hpp"
+#include "solver/formulations/registry.hpp"
+#include "solver/loads.hpp"
+#include "solver/materials/material.hpp"
+#include "solver/transfer/transfer.hpp"
+
+namespace swmpm {
+namespace {
+
+template <int Dim, class Shape>
+class Dry final : public Formulation<Dim> {
+  static constexpr int S = Shape::support;
+
+ public:
+  Dry(const scene::Scene& s, const State<Dim>& state)
+      : grid_(make_grid<Dim>(s, Shape::degree, Shape::bspline)),
+        bcs_(s),
+        loads_(s, state.solid),
+        flip_(s.solver.flip),
+        damping_(s.solver.damping),
+        materials_(make_materials<Dim>(s)),
+        material_particles_(group_by_material(state.solid, s.materials.size())) {
+    nodes_.resize(grid_.num_nodes());
+  }
+
+  std::string name() const override { return "dry"; }
+
+  void step(State<Dim>& st, const StepContext& ctx) override {
+    ParticleSet<Dim>& ps = st.solid;
+    const double dt = ctx.dt;
+    Vec<Dim> b;
+    for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
+    double t0 = omp_get_wtime();
+    auto lap = [&](const char* stage) {
+      const double t1 = omp_get_wtime();
+      this->times_.add(stage, t1 - t0);
+      t0 = t1;
+    };
+
+    long bad = -1;
+    box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);                       // (1)
+    if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
+    transfer::build_schedule(grid_, sd_, schedule_);
+    transfer::clear_nodes(grid_, box_, nodes_);
+    lap("shape functions");
+
+    transfer::scatter_mass_momentum_force(grid_, schedule_, ps, sd_, b, nodes_);       // (2)
+    loads_.for_each_force(ctx.t, [&](int p, const Vec<Dim>& f_p) {                     // (3)
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) { nodes_.f[i] += N * f_p; });
+    });
+    lap("p2g");
+
+    update_grid(dt);                                                                    // (4)
+    lap("grid update");
+
+    transfer::gather_velocity_position(grid_, nodes_, sd_, dt, flip_, ps);              // (5)
+    lap("g2p");
+
+    transfer::scatter_momentum(grid_, schedule_, box_, ps, sd_, nodes_);                // (6)
+    bcs_.apply(grid_, box_, nodes_.v, false);
+    lap("musl remap");
+
+    bad = transfer::gather_velocity_gradient(grid_, nodes_, sd_, dt, ps);               // (7)
+    if (bad >= 0) st.health.report(bad, "solid", "volume ratio J = det F <= 0 (or not finite)");
+    lap("velocity gradient");
+
+    for (std::size_t k = 0; k < materials_.size(); ++k) {                               // (8)
+      if (material_particles_[k].empty()) continue;
+      const long m_bad = materials_[k]->update_stress(ps, material_particles_[k], dt);
+      if (m_bad >= 0) st.health.report(m_bad, "solid", "stress update failed (" + materials_[k]->name() + ")");
+    }
+    lap("stress update");
+  }
+
+  double critical_time_step(const State<Dim>& st, std::string& reason) const override {
+    // CFL: dt = h / (c_p + |v|max), c_p = sqrt(M / rho) the P-wave speed of each material.
+    const ParticleSet<Dim>& ps = st.solid;
+    double c_max = 0.0;
+    for (std::size_t k = 0; k < materials_.size(); ++k) {
+      if (material_particles_[k].empty()) continue;
+      double rho_min = std::numeric_limits<double>::max();
+      for (int p : material_particles_[k]) rho_min = std::min(rho_min, ps.m[p] / ps.V[p]);
+      c_max = std::max(c_max, std::sqrt(materials_[k]->p_wave_modulus() / rho_min));
+    }
+    double v_max = 0.0;
+    const long n = static_cast<long>(ps.size());
+#pragma omp parallel for reduction(max : v_max)
+    for (long p = 0; p < n; ++p) v_max = std::max(v_max, ps.v[p].norm());
+    reason = "P-wave CFL (c = " + std::to_string(c_max) + " m/s, |v|max = " + std::to_string(v_max) + " m/s)";
+    return grid_.h() / (c_max + v_max);
+  }
+
+  double kinetic_energy(const State<Dim>& st) const override {
+    return fixed_order_sum(st.solid.size(), [&](std::size_t p) { return 0.5 * st.solid.m[p] * st.solid.v[p].squaredNorm(); });
+  }
+  double strain_energy(const State<Dim>& st) const override {
+    return fixed_order_sum(st.solid.size(), [&](std::size_t p) {
+      return materials_[st.solid.material[p]]->strain_energy(st.solid, static_cast<int>(p));
+    });
+  }
+  double external_power(const State<Dim>& st, const StepContext& ctx) const override {
+    const ParticleSet<Dim>& ps = st.solid;
+    Vec<Dim> b;
+    for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
+    double power = fixed_order_sum(ps.size(), [&](std::size_t p) { return ps.m[p] * b.dot(ps.v[p]); });
+    loads_.for_each_force(ctx.t, [&](int p, const Vec<Dim>& f_p) { power += f_p.dot(ps.v[p]); });
+    return power;
+  }
+  std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
+
+ private:
+  void update_grid(double dt) {
+    // vL_i = (mv)_i / m_i;  f_i -= alpha |f_i| sign(vL_i) (local damping);  v_i = vL_i + dt f_i / m_i
+    const double alpha = damping_;
+    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+      const double m = nodes_.m[i];
+      if (m <= transfer::empty_node_mass) {
+        nodes_.vL[i].setZero();
+        nodes_.v[i].setZero();
+        return;
+      }
+      const Vec<Dim> vL = nodes_.mv[i] / m;
+      Vec<Dim> f = nodes_.f[i];
+      if (alpha > 0.0)
+        for (int a = 0; a < Dim; ++a) f[a] -= alpha * std::abs(f[a]) * (vL[a] > 0 ? 1.0 : (vL[a] < 0 ? -1.0 : 0.0));
+      nodes_.vL[i] = vL;
+      nodes_.v[i] = vL + dt / m * f;
+    });
+    bcs_.apply(grid_, box_, nodes_.vL, false);
+    bcs_.apply(grid_, box_, nodes_.v, true);
+  }
+
+  Grid<Dim> grid_;
+  GridBoundary<Dim> bcs_;
+  ParticleLoads<Dim> loads_;
+  double flip_, damping_;
+  std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
+  std::vector<std::vector<int>> material_particles_;
+  NodeFields<Dim> nodes_;
+  NodeBox<Dim> box_;
+  std::vector<shape::ShapeData<Dim, S>> sd_;
+  StripeSchedule schedule_;
+};
+
+}  // namespace
+
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_dry(const scene::Scene& s, const State<Dim>& state) {
+  return dispatch_shape<Dim>(s.grid.shape_function, [&]<class Shape>() -> std::unique_ptr<Formulation<Dim>> {
+    return std::make_unique<Dry<Dim, Shape>>(s, state);
+  });
+}
+
+template std::unique_ptr<Formulation<2>> make_dry<2>(const scene::Scene&, const State<2>&);
+template std::unique_ptr<Formulation<3>> make_dry<3>(const scene::Scene&, const State<3>&);
+
+}  // namespace swmpm

@@ -1,0 +1,28 @@
+#include "solver/formulations/registry.hpp"
+
+namespace swmpm {
+
+void StageTimes::add(const char* name, double s) {
+  for (std::size_t k = 0; k < names.size(); ++k)
+    if (names[k] == name) {
+      seconds[k] += s;
+      return;
+    }
+  names.emplace_back(name);
+  seconds.push_back(s);
+}
+
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_formulation(const scene::Scene& s, const State<Dim>& state) {
+  switch (s.formulation) {
+    case scene::Formulation::dry: return make_dry<Dim>(s, state);
+    default:
+      throw std::runtime_error("formulation \"" + scene::to_string(s.formulation) +
+                               "\" is not implemented yet in this version (available: dry)");
+  }
+}
+
+template std::unique_ptr<Formulation<2>> make_formulation<2>(const scene::Scene&, const State<2>&);
+template std::unique_ptr<Formulation<3>> make_formulation<3>(const scene::Scene&, const State<3>&);
+
+}  // namespace swmpm

@@ -1,0 +1,99 @@
+// Helpers every formulation uses at construction, and the shape-function dispatch (done once).
+#pragma once
+
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include "scene/scene.hpp"
+#include "solver/formulation.hpp"
+#include "solver/grid/grid.hpp"
+#include "solver/materials/material.hpp"
+#include "solver/shape/shape.hpp"
+
+namespace swmpm {
+
+template <int Dim>
+Grid<Dim> make_grid(const scene::Scene& s, int degree, bool bspline) {
+  Vec<Dim> lo, hi;
+  for (int a = 0; a < Dim; ++a) {
+    lo[a] = s.grid.min[a];
+    hi[a] = s.grid.max[a];
+  }
+  Grid<Dim> g(lo, hi, s.grid.cell_size, degree, bspline);
+  for (int a = 0; a < Dim; ++a)
+    if (g.axis(a).cells < 2)
+      throw std::runtime_error("grid: the grid needs at least 2 cells along every axis (axis " +
+                               std::to_string(a) + " has " + std::to_string(g.axis(a).cells) + ")");
+  return g;
+}
+
+template <int Dim>
+std::vector<std::unique_ptr<MaterialModel<Dim>>> make_materials(const scene::Scene& s) {
+  std::vector<std::unique_ptr<MaterialModel<Dim>>> out;
+  for (const auto& m : s.materials)
+    out.push_back(m.model == scene::MaterialModel::fluid ? nullptr : make_material<Dim>(m, s));
+  return out;
+}
+
+template <int Dim>
+std::vector<std::vector<int>> group_by_material(const ParticleSet<Dim>& ps, std::size_t materials) {
+  std::vector<std::vector<int>> groups(materials);
+  for (std::size_t p = 0; p < ps.size(); ++p) groups.at(ps.material[p]).push_back(static_cast<int>(p));
+  return groups;
+}
+
+/// Sum of f(p) over p < n in fixed-size chunks, chunks added in order: the same bits for any
+/// thread count.
+template <class F>
+double fixed_order_sum(std::size_t n, F&& f) {
+  constexpr std::size_t chunk = 4096;
+  const long chunks = static_cast<long>((n + chunk - 1) / chunk);
+  std::vector<double> partial(chunks, 0.0);
+#pragma omp parallel for schedule(static)
+  for (long c = 0; c < chunks; ++c) {
+    double sum = 0.0;
+    for (std::size_t p = c * chunk; p < std::min(n, (c + 1) * chunk); ++p) sum += f(p);
+    partial[c] = sum;
+  }
+  double total = 0.0;
+  for (double v : partial) total += v;
+  return total;
+}
+
+/// Number of distinct cells that hold a particle.
+template <int Dim>
+std::size_t count_active_cells(const Grid<Dim>& g, const ParticleSet<Dim>& ps) {
+  std::size_t cells = 1;
+  for (int a = 0; a < Dim; ++a) cells *= static_cast<std::size_t>(g.axis(a).cells);
+  std::vector<char> used(cells, 0);
+  for (const auto& x : ps.x) {
+    std::size_t idx = 0;
+    for (int a = Dim - 1; a >= 0; --a) {
+      const double xi = (x[a] - g.axis(a).origin) / g.h();
+      const int c = std::isfinite(xi) ? std::clamp(static_cast<int>(std::floor(xi)), 0, g.axis(a).cells - 1) : 0;
+      idx = idx * g.axis(a).cells + c;
+    }
+    used[idx] = 1;
+  }
+  std::size_t count = 0;
+  for (char u : used) count += u;
+  return count;
+}
+
+/// Calls fn.template operator()<Shape>() with the shape-function policy the scene names.
+template <int Dim, class Fn>
+auto dispatch_shape(scene::ShapeFunction f, Fn&& fn) {
+  switch (f) {
+    case scene::ShapeFunction::linear: return fn.template operator()<shape::Linear>();
+    case scene::ShapeFunction::gimp: return fn.template operator()<shape::Gimp>();
+    case scene::ShapeFunction::bspline2: return fn.template operator()<shape::BSpline2>();
+    case scene::ShapeFunction::bspline3: return fn.template operator()<shape::BSpline3>();
+  }
+  throw std::logic_error("unknown shape function");
+}
+
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_dry(const scene::Scene& s, const State<Dim>& state);
+
+}  // namespace swmpm

@@ -1,0 +1,80 @@
+// Time functions, boundary conditions on grid faces, and particle loads (tractions, pressures).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "scene/scene.hpp"
+#include "solver/grid/grid.hpp"
+#include "solver/particles/particles.hpp"
+
+namespace swmpm {
+
+/// f(t) of a scene TimeFunction: ramp(t) * (expression(t) | table(t) | 1).
+class TimeFunction {
+ public:
+  explicit TimeFunction(const scene::TimeFunction& tf);
+  ~TimeFunction();
+  TimeFunction(TimeFunction&&) noexcept;
+  TimeFunction& operator=(TimeFunction&&) noexcept;
+  double operator()(double t) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Solid boundary conditions on the grid's faces, applied to nodal velocities.
+template <int Dim>
+class GridBoundary {
+ public:
+  struct Face {
+    int axis;  // 0 x, 1 y, 2 z
+    int side;  // 0 min, 1 max
+    scene::SolidBc kind;
+    double mu;  // Coulomb coefficient (friction)
+  };
+  GridBoundary(const scene::Scene& s);
+  /// Enforces the conditions on v for nodes of `box` that lie on a constrained face. Friction acts
+  /// only when `with_friction` (on the end-of-step velocity; the start-of-step velocity only gets
+  /// the kinematic constraints).
+  void apply(const Grid<Dim>& g, const NodeBox<Dim>& box, std::vector<Vec<Dim>>& v,
+             bool with_friction) const;
+  const std::vector<Face>& faces() const { return faces_; }
+
+ private:
+  std::vector<Face> faces_;
+};
+
+/// Tractions and pressures on bodies' faces, as forces on the face particles.
+template <int Dim>
+class ParticleLoads {
+ public:
+  ParticleLoads(const scene::Scene& s, const ParticleSet<Dim>& ps);
+  /// Adds f_p(t) to ext[p] for every loaded particle (serial; few particles).
+  template <class Fn>
+  void for_each_force(double t, Fn&& fn) const {
+    for (const auto& e : entries_) {
+      const double scale = e.fn(t);
+      if (scale == 0.0) continue;
+      for (std::size_t k = 0; k < e.particles.size(); ++k) fn(e.particles[k], (scale * e.force[k]).eval());
+    }
+  }
+  std::size_t count() const { return entries_.size(); }
+  /// Number of particles a load acts on (to report and test the tagging).
+  std::size_t particles(std::size_t load) const { return entries_[load].particles.size(); }
+
+ private:
+  struct Entry {
+    std::vector<int> particles;
+    std::vector<Vec<Dim>> force;  // N (N/m in 2D) at f(t) = 1
+    TimeFunction fn;
+  };
+  std::vector<Entry> entries_;
+};
+
+/// Face index 2 * axis + side of a face name x_min .. z_max.
+int face_index(const std::string& name);
+
+}  // namespace swmpm

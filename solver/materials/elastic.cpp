@@ -1,0 +1,118 @@
+// Elastic models: `linear-elastic` (hypoelastic, Jaumann rate — small strains, objective under
+// rotation) and `hencky` (hyperelastic, logarithmic strain — finite strains).
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+
+#include "solver/materials/material.hpp"
+
+namespace swmpm {
+namespace {
+
+constexpr long kNoParticle = std::numeric_limits<long>::max();
+
+template <int Dim>
+class LinearElastic final : public MaterialModel<Dim> {
+ public:
+  explicit LinearElastic(Elastic e) : e_(e) {}
+  std::string name() const override { return "linear-elastic"; }
+  double p_wave_modulus() const override { return e_.p_wave(); }
+
+  long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double dt) const override {
+    long bad = kNoParticle;
+    const long n = static_cast<long>(ids.size());
+#pragma omp parallel for schedule(static) reduction(min : bad)
+    for (long k = 0; k < n; ++k) {
+      const int p = ids[k];
+      const Mat3 L = embed<Dim>(ps.L[p]);
+      const Mat3 D = 0.5 * (L + L.transpose());  // rate of deformation
+      const Mat3 W = 0.5 * (L - L.transpose());  // spin
+      const Mat3 s = to_matrix(ps.sigma[p]);
+      // Jaumann rate: sigma_dot = C : D + W sigma - sigma W
+      const Mat3 rate = e_.lambda * D.trace() * Mat3::Identity() + 2.0 * e_.mu * D + W * s - s * W;
+      ps.sigma[p] = to_voigt(s + dt * rate);
+      if (!(ps.F[p].determinant() > 0.0) || !ps.sigma[p].allFinite()) bad = std::min(bad, static_cast<long>(p));
+    }
+    return bad == kNoParticle ? -1 : bad;
+  }
+
+  /// Complementary energy 1/2 sigma : C^-1 : sigma V (exact for linear elasticity).
+  double strain_energy(const ParticleSet<Dim>& ps, int p) const override {
+    const Sym& s = ps.sigma[p];
+    const double tr = s[0] + s[1] + s[2];
+    const double ss = s[0] * s[0] + s[1] * s[1] + s[2] * s[2] +
+                      2.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]);
+    return 0.5 * ((1.0 + e_.nu) / e_.E * ss - e_.nu / e_.E * tr * tr) * ps.V[p];
+  }
+
+ private:
+  Elastic e_;
+};
+
+template <int Dim>
+class Hencky final : public MaterialModel<Dim> {
+ public:
+  explicit Hencky(Elastic e) : e_(e) {}
+  std::string name() const override { return "hencky"; }
+  double p_wave_modulus() const override { return e_.p_wave(); }
+
+  long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double) const override {
+    long bad = kNoParticle;
+    const long n = static_cast<long>(ids.size());
+#pragma omp parallel for schedule(static) reduction(min : bad)
+    for (long k = 0; k < n; ++k) {
+      const int p = ids[k];
+      const Mat3& F = ps.F[p];
+      const double J = F.determinant();
+      if (!(J > 0.0)) {
+        bad = std::min(bad, static_cast<long>(p));
+        continue;
+      }
+      // Kirchhoff stress tau = lambda tr(eps) I + 2 mu eps, eps = 1/2 ln(F F^T); sigma = tau / J.
+      Eigen::SelfAdjointEigenSolver<Mat3> eig;
+      eig.computeDirect(F * F.transpose());
+      const Eigen::Vector3d eps = 0.5 * eig.eigenvalues().array().log();
+      const double tr = eps.sum();
+      const Eigen::Vector3d tau = e_.lambda * tr * Eigen::Vector3d::Ones() + 2.0 * e_.mu * eps;
+      const Mat3& Q = eig.eigenvectors();
+      ps.sigma[p] = to_voigt(Q * (tau / J).asDiagonal() * Q.transpose());
+      if (!ps.sigma[p].allFinite()) bad = std::min(bad, static_cast<long>(p));
+    }
+    return bad == kNoParticle ? -1 : bad;
+  }
+
+  /// Stored energy psi = mu eps:eps + lambda/2 tr(eps)^2 per reference volume, times V0.
+  double strain_energy(const ParticleSet<Dim>& ps, int p) const override {
+    Eigen::SelfAdjointEigenSolver<Mat3> eig;
+    eig.computeDirect(ps.F[p] * ps.F[p].transpose());
+    const Eigen::Vector3d eps = 0.5 * eig.eigenvalues().array().log();
+    const double tr = eps.sum();
+    return (e_.mu * eps.squaredNorm() + 0.5 * e_.lambda * tr * tr) * ps.V0[p];
+  }
+
+ private:
+  Elastic e_;
+};
+
+}  // namespace
+
+template <int Dim>
+std::unique_ptr<MaterialModel<Dim>> make_material(const scene::Material& m, const scene::Scene&) {
+  using scene::MaterialModel;
+  switch (m.model) {
+    case MaterialModel::linear_elastic:
+      return std::make_unique<LinearElastic<Dim>>(Elastic::from(m.at("youngs_modulus"), m.at("poisson_ratio")));
+    case MaterialModel::hencky:
+      return std::make_unique<Hencky<Dim>>(Elastic::from(m.at("youngs_modulus"), m.at("poisson_ratio")));
+    default:
+      throw std::runtime_error("material \"" + m.name + "\": model \"" + scene::to_string(m.model) +
+                               "\" is not implemented yet in this version (available: linear-elastic, hencky)");
+  }
+}
+
+template std::unique_ptr<MaterialModel<2>> make_material<2>(const scene::Material&, const scene::Scene&);
+template std::unique_ptr<MaterialModel<3>> make_material<3>(const scene::Material&, const scene::Scene&);
+
+}  // namespace swmpm

@@ -1,0 +1,46 @@
+// Constitutive models behind one small interface. The solver calls each model once per step for
+// all of its particles (one virtual call per material per step, none per particle); the loop over
+// particles lives inside the model, so the compiler sees the whole kernel.
+//
+// Contract of update_stress: on entry ps.F[p] is F_{n+1} (already updated from L = ps.L[p] over dt)
+// and ps.sigma[p] is sigma_n; on exit ps.sigma[p] is sigma_{n+1} (Cauchy, tension positive). A
+// model must not allocate. It returns the smallest particle index whose update failed (J <= 0,
+// non-finite stress), or -1.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string>
+
+#include "scene/scene.hpp"
+#include "solver/particles/particles.hpp"
+
+namespace swmpm {
+
+template <int Dim>
+class MaterialModel {
+ public:
+  virtual ~MaterialModel() = default;
+  virtual std::string name() const = 0;
+  virtual long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double dt) const = 0;
+  /// Constrained (P-wave) modulus K + 4G/3 [Pa] at the current state, for the CFL condition.
+  virtual double p_wave_modulus() const = 0;
+  /// Stored elastic energy of particle p [J, or J/m in plane strain].
+  virtual double strain_energy(const ParticleSet<Dim>& ps, int p) const = 0;
+};
+
+/// Builds the model a scene material names. Throws std::runtime_error for models this build's
+/// formulations cannot run yet.
+template <int Dim>
+std::unique_ptr<MaterialModel<Dim>> make_material(const scene::Material& m, const scene::Scene& s);
+
+/// Lamé parameters from Young's modulus and Poisson's ratio.
+struct Elastic {
+  double E, nu, lambda, mu, K;
+  static Elastic from(double E, double nu) {
+    return {E, nu, E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu)), E / (3 * (1 - 2 * nu))};
+  }
+  double p_wave() const { return K + 4.0 * mu / 3.0; }
+};
+
+}  // namespace swmpm

@@ -1,0 +1,127 @@
+#include "solver/output/monitors.hpp"
+
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace swmpm {
+
+template <int Dim>
+Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::string& path,
+                        const std::string& header_comment)
+    : out_(path) {
+  if (!out_) throw std::runtime_error(path + ": cannot write file");
+  const auto& ps = st.solid;
+  std::ostringstream header;
+  header << "time";
+  for (std::size_t k = 0; k < s.output.monitors.size(); ++k) {
+    const auto& mon = s.output.monitors[k];
+    const std::string where = "/output/monitors/" + std::to_string(k);
+    int particle = -1;
+    if (mon.phase != "solid")
+      throw std::runtime_error(where + "/phase: \"" + mon.phase + "\" is not available in this formulation");
+    if (mon.at) {
+      double best = std::numeric_limits<double>::max();
+      for (std::size_t p = 0; p < ps.size(); ++p) {
+        double d2 = 0.0;
+        for (int a = 0; a < Dim; ++a) d2 += (ps.x0[p][a] - (*mon.at)[a]) * (ps.x0[p][a] - (*mon.at)[a]);
+        if (d2 < best) {
+          best = d2;
+          particle = static_cast<int>(p);
+        }
+      }
+    } else if (mon.particle) {
+      for (std::size_t p = 0; p < ps.size(); ++p)
+        if (ps.id[p] == *mon.particle) particle = static_cast<int>(p);
+      if (particle < 0)
+        throw std::runtime_error(where + "/particle: no solid particle has id " + std::to_string(*mon.particle));
+    }
+    monitor_particle_.push_back(particle);
+    names_.push_back(mon.name);
+    for (const auto& qn : mon.quantities) {
+      Column c{particle, Q::disp, 0};
+      const auto xyz = std::string("xyz").find(qn.back());
+      const int comp = xyz == std::string::npos || static_cast<int>(xyz) >= Dim ? -1 : static_cast<int>(xyz);
+      if (qn.rfind("displacement_", 0) == 0) c = {particle, Q::disp, comp};
+      else if (qn.rfind("velocity_", 0) == 0) c = {particle, Q::vel, comp};
+      else if (qn.rfind("stress_", 0) == 0) {
+        static const char* names[] = {"xx", "yy", "zz", "xy", "yz", "xz"};
+        int idx = -1;
+        for (int i = 0; i < 6; ++i)
+          if (qn.substr(7) == names[i]) idx = i;
+        c = {particle, Q::stress, idx};
+      } else if (qn == "mean_effective_stress") c = {particle, Q::p_mean, 0};
+      else if (qn == "deviatoric_stress") c = {particle, Q::q_dev, 0};
+      else if (qn == "plastic_strain") c = {particle, Q::eps_p, 0};
+      else if (qn == "kinetic_energy") c = {-1, Q::kinetic, 0};
+      else if (qn == "strain_energy") c = {-1, Q::strain, 0};
+      else if (qn == "total_energy") c = {-1, Q::total, 0};
+      else if (qn == "external_work") {
+        c = {-1, Q::work, 0};
+        needs_work_ = true;
+      } else
+        throw std::runtime_error(where + "/quantities: \"" + qn + "\" is not available in this formulation");
+      if (c.comp < 0) throw std::runtime_error(where + "/quantities: unknown component in \"" + qn + "\"");
+      if (c.particle < 0 && c.q != Q::kinetic && c.q != Q::strain && c.q != Q::total && c.q != Q::work)
+        throw std::runtime_error(where + ": \"" + qn + "\" needs \"at\" or \"particle\"");
+      columns_.push_back(c);
+      header << "," << mon.name << "." << qn;
+    }
+  }
+  out_ << header_comment << "\n" << header.str() << "\n";
+  out_ << std::setprecision(10);
+}
+
+template <int Dim>
+void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, double external_work) {
+  const auto& ps = st.solid;
+  out_ << st.time;
+  double ke = -1.0, se = -1.0;
+  for (const Column& c : columns_) {
+    double val = 0.0;
+    const int p = c.particle;
+    switch (c.q) {
+      case Q::disp: val = ps.x[p][c.comp] - ps.x0[p][c.comp]; break;
+      case Q::vel: val = ps.v[p][c.comp]; break;
+      case Q::stress: val = ps.sigma[p][c.comp]; break;
+      case Q::p_mean: val = mean_stress(ps.sigma[p]); break;
+      case Q::q_dev: val = deviatoric_stress(ps.sigma[p]); break;
+      case Q::eps_p: val = ps.eps_p[p]; break;
+      case Q::kinetic: val = ke = ke < 0 ? f.kinetic_energy(st) : ke; break;
+      case Q::strain: val = se = se < 0 ? f.strain_energy(st) : se; break;
+      case Q::total:
+        ke = ke < 0 ? f.kinetic_energy(st) : ke;
+        se = se < 0 ? f.strain_energy(st) : se;
+        val = ke + se;
+        break;
+      case Q::work: val = external_work; break;
+    }
+    out_ << "," << val;
+  }
+  out_ << "\n";
+  out_.flush();
+}
+
+template <int Dim>
+std::vector<std::string> Monitors<Dim>::describe(const State<Dim>& st) const {
+  std::vector<std::string> lines;
+  for (std::size_t k = 0; k < names_.size(); ++k) {
+    const int p = monitor_particle_[k];
+    std::ostringstream os;
+    os << "monitor " << names_[k] << ": ";
+    if (p < 0) os << "whole system";
+    else {
+      os << "follows solid particle " << st.solid.id[p] << " starting at (";
+      for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << st.solid.x0[p][a];
+      os << ")";
+    }
+    lines.push_back(os.str());
+  }
+  return lines;
+}
+
+template class Monitors<2>;
+template class Monitors<3>;
+
+}  // namespace swmpm

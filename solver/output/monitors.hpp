@@ -1,0 +1,39 @@
+// monitors.csv: one row per recorded time, one column per "<monitor>.<quantity>".
+// A point monitor follows one particle: the particle nearest to `at` at t = 0 (or the given id).
+// A global monitor (no `at`, no `particle`) records energies of the whole system.
+#pragma once
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "scene/scene.hpp"
+#include "solver/formulation.hpp"
+
+namespace swmpm {
+
+template <int Dim>
+class Monitors {
+ public:
+  Monitors(const scene::Scene& s, const State<Dim>& st, const std::string& path, const std::string& header_comment);
+  bool needs_external_work() const { return needs_work_; }
+  /// Appends one row at the state's time.
+  void record(const State<Dim>& st, const Formulation<Dim>& f, double external_work);
+  /// One line per point monitor: which particle it follows and where it started.
+  std::vector<std::string> describe(const State<Dim>& st) const;
+
+ private:
+  enum class Q { disp, vel, stress, p_mean, q_dev, eps_p, kinetic, strain, total, work };
+  struct Column {
+    int particle;  // -1 for global
+    Q q;
+    int comp;
+  };
+  std::vector<std::string> names_;
+  std::vector<int> monitor_particle_;
+  std::vector<Column> columns_;
+  bool needs_work_ = false;
+  std::ofstream out_;
+};
+
+}  // namespace swmpm

@@ -1,0 +1,95 @@
+#include "solver/output/particle_io.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace swmpm {
+
+template <int Dim>
+ParticleSet<Dim> particles_from_cloud(const scene::PointCloud& c, const std::string& where) {
+  ParticleSet<Dim> ps;
+  const std::size_t n = c.size();
+  ps.resize(n);
+  const auto& id = c.get("id", where);
+  const auto& mass = c.get("mass", where);
+  const auto& volume = c.get("volume", where);
+  const auto& half = c.get("half_size", where);
+  const auto& vel = c.get("velocity", where);
+  const auto& stress = c.get("stress", where);
+  const auto& material = c.get("material", where);
+  const auto& body = c.get("body", where);
+  const auto& faces = c.get("faces", where);
+  const auto* disp = c.find("displacement");
+  const auto* eps_p = c.find("plastic_strain");
+  for (std::size_t p = 0; p < n; ++p) {
+    ps.id[p] = static_cast<std::int64_t>(id.values[p]);
+    for (int a = 0; a < Dim; ++a) {
+      ps.x[p][a] = c.points[p][a];
+      ps.x0[p][a] = c.points[p][a] - (disp ? disp->values[3 * p + a] : 0.0);
+      ps.v[p][a] = vel.values[3 * p + a];
+      ps.l[p][a] = half.values[3 * p + a];
+    }
+    ps.m[p] = mass.values[p];
+    ps.V[p] = ps.V0[p] = volume.values[p];
+    for (int k = 0; k < 6; ++k) ps.sigma[p][k] = stress.values[6 * p + k];
+    ps.material[p] = static_cast<std::int32_t>(material.values[p]);
+    ps.body[p] = static_cast<std::int32_t>(body.values[p]);
+    ps.faces[p] = static_cast<std::uint32_t>(faces.values[p]);
+    if (eps_p) ps.eps_p[p] = eps_p->values[p];
+    if (!(ps.m[p] > 0.0) || !(ps.V[p] > 0.0))
+      throw std::runtime_error(where + ": particle " + std::to_string(ps.id[p]) +
+                               " has non-positive mass or volume");
+  }
+  return ps;
+}
+
+template <int Dim>
+scene::PointCloud particles_to_cloud(const ParticleSet<Dim>& ps) {
+  scene::PointCloud c;
+  const std::size_t n = ps.size();
+  c.points.resize(n);
+  for (std::size_t p = 0; p < n; ++p) {
+    c.points[p] = {0, 0, 0};
+    for (int a = 0; a < Dim; ++a) c.points[p][a] = ps.x[p][a];
+  }
+  auto& id = c.add("id", 1);
+  auto& mass = c.add("mass", 1);
+  auto& volume = c.add("volume", 1);
+  auto& half = c.add("half_size", 3);
+  auto& vel = c.add("velocity", 3);
+  auto& disp = c.add("displacement", 3);
+  auto& stress = c.add("stress", 6);
+  auto& p_mean = c.add("mean_effective_stress", 1);
+  auto& q = c.add("deviatoric_stress", 1);
+  auto& eps_p = c.add("plastic_strain", 1);
+  auto& J = c.add("volume_ratio", 1);
+  auto& material = c.add("material", 1);
+  auto& body = c.add("body", 1);
+  auto& faces = c.add("faces", 1);
+  for (std::size_t p = 0; p < n; ++p) {
+    id.values[p] = static_cast<double>(ps.id[p]);
+    mass.values[p] = ps.m[p];
+    volume.values[p] = ps.V[p];
+    for (int a = 0; a < Dim; ++a) {
+      half.values[3 * p + a] = ps.l[p][a];
+      vel.values[3 * p + a] = ps.v[p][a];
+      disp.values[3 * p + a] = ps.x[p][a] - ps.x0[p][a];
+    }
+    for (int k = 0; k < 6; ++k) stress.values[6 * p + k] = ps.sigma[p][k];
+    p_mean.values[p] = mean_stress(ps.sigma[p]);
+    q.values[p] = deviatoric_stress(ps.sigma[p]);
+    eps_p.values[p] = ps.eps_p[p];
+    J.values[p] = ps.V[p] / ps.V0[p];
+    material.values[p] = ps.material[p];
+    body.values[p] = ps.body[p];
+    faces.values[p] = ps.faces[p];
+  }
+  return c;
+}
+
+template ParticleSet<2> particles_from_cloud<2>(const scene::PointCloud&, const std::string&);
+template ParticleSet<3> particles_from_cloud<3>(const scene::PointCloud&, const std::string&);
+template scene::PointCloud particles_to_cloud<2>(const ParticleSet<2>&);
+template scene::PointCloud particles_to_cloud<3>(const ParticleSet<3>&);
+
+}  // namespace swmpm

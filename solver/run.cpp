@@ -1,0 +1,292 @@
+// The time loop (written once): dt control, gravity ramp, frames, monitors, progress, divergence.
+#include "solver/run.hpp"
+
+#include <omp.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "scene/pointcloud.hpp"
+#include "scene/scene.hpp"
+#include "solver/formulation.hpp"
+#include "solver/output/monitors.hpp"
+#include "solver/output/particle_io.hpp"
+#include "swmpm/version.hpp"
+
+namespace fs = std::filesystem;
+
+namespace swmpm {
+namespace {
+
+volatile std::sig_atomic_t g_interrupted = 0;
+extern "C" void on_sigint(int) { g_interrupted = 1; }
+
+/// Writes to log.txt always and to the terminal unless quiet.
+class Log {
+ public:
+  Log(const std::string& path, bool quiet) : file_(path), quiet_(quiet) {}
+  void line(const std::string& s) {
+    file_ << s << "\n";
+    file_.flush();
+    if (!quiet_) std::cout << s << std::endl;
+  }
+
+ private:
+  std::ofstream file_;
+  bool quiet_;
+};
+
+std::string fmt(double v, int prec = 6) {
+  std::ostringstream os;
+  os << std::setprecision(prec) << v;
+  return os.str();
+}
+
+std::size_t peak_memory_bytes() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return static_cast<std::size_t>(ru.ru_maxrss) * 1024;  // ru_maxrss is in KiB on Linux
+}
+
+template <int Dim>
+class Runner {
+ public:
+  Runner(const std::string& run_dir, const SolveOptions& opt)
+      : dir_(run_dir), opt_(opt), log_((fs::path(run_dir) / "log.txt").string(), opt.quiet) {}
+
+  int run() {
+    const auto wall_start = std::chrono::steady_clock::now();
+    scene_ = scene::load_scene((dir_ / "scene.json").string());
+    const fs::path particles = dir_ / "particles" / "solid.vtu";
+    state_.solid = particles_from_cloud<Dim>(scene::read_vtu(particles.string()), particles.string());
+    auto formulation = make_formulation<Dim>(scene_, state_);
+    threads_ = omp_get_max_threads();
+
+    const fs::path out = dir_ / "output";
+    fs::remove_all(out);
+    fs::create_directories(out);
+    const std::string stamp = "# swmpm " + std::string(version) + " (" + git_hash + "), scene " + scene_.name +
+                              ", formulation " + formulation->name();
+    Monitors<Dim> monitors(scene_, state_, (dir_ / "monitors.csv").string(), stamp);
+
+    log_.line("swmpm " + std::string(version) + " (" + git_hash + ") solving " + scene_.name + ": " +
+              formulation->name() + ", " + std::to_string(Dim) + "D, " + scene::to_string(scene_.grid.shape_function) +
+              ", " + std::to_string(state_.solid.size()) + " solid particles, " + std::to_string(threads_) + " threads");
+    for (const auto& l : monitors.describe(state_)) log_.line(l);
+
+    std::string dt_reason;
+    const bool auto_dt = !scene_.time.dt.has_value();
+    {
+      const double dt_crit = formulation->critical_time_step(state_, dt_reason);
+      if (auto_dt) {
+        log_.line("dt auto: " + fmt(scene_.time.cfl * dt_crit) + " s = cfl " + fmt(scene_.time.cfl) + " x " +
+                  fmt(dt_crit) + " s, limited by " + dt_reason);
+      } else {
+        log_.line("dt " + fmt(*scene_.time.dt) + " s (critical " + fmt(dt_crit) + " s by " + dt_reason + ")");
+        if (*scene_.time.dt > dt_crit)
+          log_.line("warning: dt exceeds the critical time step; the run may diverge");
+      }
+    }
+
+    std::signal(SIGINT, on_sigint);
+    const double end = scene_.time.end;
+    const double eps_t = 1e-12 * end;
+    double next_frame = 0.0, next_monitor = 0.0, work = 0.0;
+    double dt_min = std::numeric_limits<double>::max(), dt_max = 0.0, dt = 0.0;
+    ParticleSet<Dim> last_good = state_.solid;
+    double last_good_time = 0.0;
+    long last_good_step = 0;
+    std::string status = "completed", diagnosis;
+    const bool tty = !opt_.quiet && isatty(fileno(stderr));
+    auto last_progress = std::chrono::steady_clock::now();
+    const auto loop_start = last_progress;
+
+    write_frame(0.0);
+    next_frame = scene_.output.interval > 0 ? scene_.output.interval : end;
+    monitors.record(state_, *formulation, work);
+    next_monitor = scene_.output.monitor_interval;
+
+    while (state_.time < end - eps_t) {
+      if (g_interrupted) {
+        status = "interrupted";
+        break;
+      }
+      if (auto_dt) {
+        std::string reason;
+        dt = scene_.time.cfl * formulation->critical_time_step(state_, reason);
+      } else {
+        dt = *scene_.time.dt;
+      }
+      dt = std::min(dt, end - state_.time);
+      StepContext ctx{state_.time, dt, gravity_at(state_.time)};
+      const double p0 = monitors.needs_external_work() ? formulation->external_power(state_, ctx) : 0.0;
+      formulation->step(state_, ctx);
+      if (!state_.health.ok()) {
+        status = "diverged";
+        diagnosis = describe_failure(last_good, ctx);
+        break;
+      }
+      if (monitors.needs_external_work()) {  // trapezoidal rule on the power of external forces
+        StepContext end_ctx{state_.time + dt, dt, gravity_at(state_.time + dt)};
+        work += 0.5 * dt * (p0 + formulation->external_power(state_, end_ctx));
+      }
+      state_.time += dt;
+      ++state_.step;
+      dt_min = std::min(dt_min, dt);
+      dt_max = std::max(dt_max, dt);
+
+      if (state_.step % scene_.solver.checkpoint_every == 0) {
+        last_good = state_.solid;  // vectors keep their capacity: no allocation after the first copy
+        last_good_time = state_.time;
+        last_good_step = state_.step;
+      }
+      if (state_.time >= next_monitor - eps_t) {
+        monitors.record(state_, *formulation, work);
+        next_monitor += scene_.output.monitor_interval;
+        if (scene_.output.monitor_interval > 0)
+          while (next_monitor <= state_.time + eps_t) next_monitor += scene_.output.monitor_interval;
+      }
+      if (state_.time >= next_frame - eps_t || state_.time >= end - eps_t) {
+        write_frame(state_.time);
+        if (scene_.output.interval > 0)
+          while (next_frame <= state_.time + eps_t) next_frame += scene_.output.interval;
+        else
+          next_frame = end;
+      }
+      if (tty) {
+        const auto now = std::chrono::steady_clock::now();
+        if (std::chrono::duration<double>(now - last_progress).count() > 0.5) {
+          last_progress = now;
+          const double el = std::chrono::duration<double>(now - loop_start).count();
+          const double rate = static_cast<double>(state_.step) / el;
+          const double eta = el * (end - state_.time) / std::max(state_.time, 1e-300);
+          std::fprintf(stderr, "\r  t = %.4g / %.4g s | step %ld | %.0f steps/s | ETA %.0f s   ", state_.time, end,
+                       state_.step, rate, eta);
+          std::fflush(stderr);
+        }
+      }
+    }
+    if (tty) std::fprintf(stderr, "\r%*s\r", 90, "");
+
+    if (status == "diverged") {
+      log_.line("DIVERGED: " + diagnosis);
+      state_.solid = last_good;
+      state_.time = last_good_time;
+      state_.step = last_good_step;
+      write_frame(last_good_time);
+      log_.line("wrote the last good state (t = " + fmt(last_good_time) + " s, step " +
+                std::to_string(last_good_step) + ") as the final frame");
+    } else if (status == "interrupted") {
+      write_frame(state_.time);
+      log_.line("interrupted at t = " + fmt(state_.time) + " s; wrote the current state as the final frame");
+    } else if (frames_.empty() || frames_.back().time < state_.time - eps_t) {
+      write_frame(state_.time);
+    }
+
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    const double loop_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+    const double us_pps = state_.step > 0 ? 1e6 * loop_wall / (static_cast<double>(state_.solid.size()) * static_cast<double>(state_.step)) : 0.0;
+
+    nlohmann::ordered_json rj;
+    rj["status"] = status;
+    if (!diagnosis.empty()) rj["diagnosis"] = diagnosis;
+    rj["formulation"] = formulation->name();
+    rj["dimension"] = Dim;
+    rj["shape_function"] = scene::to_string(scene_.grid.shape_function);
+    rj["particles"] = {{"solid", state_.solid.size()}};
+    rj["active_cells"] = formulation->active_cells(state_);
+    rj["steps"] = state_.step;
+    rj["dt"] = auto_dt ? dt_min : *scene_.time.dt;
+    rj["dt_min"] = state_.step ? dt_min : 0.0;
+    rj["dt_max"] = dt_max;
+    rj["dt_limit"] = dt_reason;
+    rj["end_time"] = state_.time;
+    rj["wall_seconds"] = wall;
+    rj["loop_seconds"] = loop_wall;
+    rj["threads"] = threads_;
+    rj["us_per_particle_step"] = us_pps;
+    rj["peak_memory_bytes"] = peak_memory_bytes();
+    rj["particle_bytes"] = state_.solid.size() * ParticleSet<Dim>::bytes_per_particle();
+    rj["frames"] = frames_.size();
+    nlohmann::ordered_json stages;
+    const auto& st = formulation->stage_times();
+    for (std::size_t k = 0; k < st.names.size(); ++k) stages[st.names[k]] = st.seconds[k];
+    rj["stage_seconds"] = stages;
+    rj["software_version"] = version;
+    rj["git_hash"] = git_hash;
+    std::ofstream(dir_ / "run.json") << rj.dump(2) << "\n";
+
+    std::ostringstream summary;
+    summary << status << ": " << state_.step << " steps to t = " << fmt(state_.time) << " s in " << fmt(wall, 4)
+            << " s wall (" << fmt(us_pps, 4) << " us per particle-step, " << threads_ << " threads)";
+    log_.line(summary.str());
+    std::ostringstream split;
+    split << "stages:";
+    double total = 0.0;
+    for (double s : st.seconds) total += s;
+    for (std::size_t k = 0; k < st.names.size(); ++k)
+      split << " " << st.names[k] << " " << fmt(100.0 * st.seconds[k] / std::max(total, 1e-300), 3) << "%";
+    log_.line(split.str());
+    return status == "completed" ? 0 : (status == "diverged" ? 3 : 4);
+  }
+
+ private:
+  std::array<double, 3> gravity_at(double t) const {
+    const double r = scene_.gravity_ramp > 0 ? std::min(1.0, t / scene_.gravity_ramp) : 1.0;
+    return {scene_.gravity[0] * r, scene_.gravity[1] * r, scene_.gravity[2] * r};
+  }
+
+  std::string describe_failure(const ParticleSet<Dim>& before, const StepContext& ctx) const {
+    const auto& h = state_.health;
+    const long p = h.particle;
+    std::ostringstream os;
+    os << h.phase << " particle " << state_.solid.id[p] << " (body \"" << scene_.bodies[state_.solid.body[p]].name
+       << "\") " << h.what << " in the step from t = " << ctx.t << " s (step " << state_.step + 1 << ", dt = " << ctx.dt
+       << " s); it was at (";
+    for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << before.x[p][a];
+    os << ") with speed " << before.v[p].norm() << " m/s at the last good state; now at (";
+    for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << state_.solid.x[p][a];
+    os << "). Try a smaller dt (or cfl), a finer output interval to see the onset, or check the loads.";
+    return os.str();
+  }
+
+  void write_frame(double t) {
+    const int k = static_cast<int>(frames_.size());
+    char name[64];
+    std::snprintf(name, sizeof name, "solid_%06d.vtu", k);
+    scene::write_vtu((dir_ / "output" / name).string(), particles_to_cloud(state_.solid));
+    frames_.push_back({t, "solid", 0, name});
+    scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);
+  }
+
+  fs::path dir_;
+  SolveOptions opt_;
+  Log log_;
+  scene::Scene scene_;
+  State<Dim> state_;
+  int threads_ = 1;
+  std::vector<scene::PvdEntry> frames_;
+};
+
+}  // namespace
+
+int solve(const std::string& run_dir, const SolveOptions& options) {
+  if (!fs::exists(fs::path(run_dir) / "scene.json"))
+    throw std::runtime_error(run_dir + ": not a run directory (no scene.json; run `swmpm preprocess` first)");
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  const scene::Scene s = scene::load_scene((fs::path(run_dir) / "scene.json").string());
+  if (s.dimension == 2) return Runner<2>(run_dir, options).run();
+  return Runner<3>(run_dir, options).run();
+}
+
+}  // namespace swmpm

@@ -1,0 +1,169 @@
+// Shape functions as compile-time policies. Each policy evaluates, for one coordinate along one
+// axis, the first node index `base` and the S one-dimensional weights w[s] and derivatives dw[s]
+// (1/m) of nodes base .. base + S - 1. Tensor products give N_ip and grad N_ip:
+//     N_ip = prod_a w_a[s_a],   d N_ip / d x_b = dw_b[s_b] prod_{a != b} w_a[s_a].
+// Every policy satisfies partition of unity and sum dw = 0 everywhere in [min, max] of the grid,
+// including the boundary cells (tests/unit/test_shape.cpp).
+//
+// - Linear: hat functions on cell corners.
+// - Gimp: uGIMP, the hat function averaged over the particle domain [x - l_p, x + l_p]; where that
+//   domain reaches past the grid boundary it is clipped to the grid, which keeps partition of unity
+//   (linear reproduction then holds for the clipped domain's centre).
+// - BSpline<p>: B-splines of degree p on the open (clamped) uniform knot vector
+//   t = {0 (p+1 times), h, 2h, ..., L (p+1 times)}: interpolatory at the boundary, so the first and
+//   last node carry Dirichlet conditions exactly, and they reproduce linear fields everywhere with
+//   nodes at the Greville abscissae (Grid). Cox–de Boor recursion (Piegl & Tiller, The NURBS Book,
+//   A2.2/A2.3), written out for the clamped uniform knots.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "solver/grid/grid.hpp"
+
+namespace swmpm::shape {
+
+struct Linear {
+  static constexpr int support = 2;
+  static constexpr int degree = 1;
+  static constexpr bool bspline = false;
+  static constexpr const char* name = "linear";
+  static void eval(const Axis& ax, double x, double /*l_p*/, int& base, double* w, double* dw) {
+    const double xi = (x - ax.origin) / ax.h;
+    const int c = std::clamp(static_cast<int>(std::floor(xi)), 0, ax.cells - 1);
+    const double r = xi - c;
+    base = c;
+    w[0] = 1.0 - r;
+    w[1] = r;
+    dw[0] = -1.0 / ax.h;
+    dw[1] = 1.0 / ax.h;
+  }
+};
+
+struct Gimp {
+  static constexpr int support = 3;
+  static constexpr int degree = 1;
+  static constexpr bool bspline = false;
+  static constexpr const char* name = "gimp";
+  /// Hat function of a node at r = 0 (r in cells) and its antiderivative.
+  static double hat(double r) { return std::max(0.0, 1.0 - std::abs(r)); }
+  static double hat_integral(double r) {
+    if (r <= -1.0) return 0.0;
+    if (r <= 0.0) return 0.5 * (r + 1.0) * (r + 1.0);
+    if (r <= 1.0) return 1.0 - 0.5 * (1.0 - r) * (1.0 - r);
+    return 1.0;
+  }
+  static void eval(const Axis& ax, double x, double l_p, int& base, double* w, double* dw) {
+    const double xi = (x - ax.origin) / ax.h;
+    const double l = l_p / ax.h;  // half-size in cells, <= 1/2
+    const int c = std::clamp(static_cast<int>(std::floor(xi)), 0, ax.cells - 1);
+    base = std::clamp(xi - c < 0.5 ? c - 1 : c, 0, ax.nodes - 3);
+    // Particle domain clipped to the grid [0, cells].
+    const double a = std::max(xi - l, 0.0), b = std::min(xi + l, static_cast<double>(ax.cells));
+    const double inv = 1.0 / (b - a);
+    for (int s = 0; s < 3; ++s) {
+      const double i = base + s;
+      w[s] = (hat_integral(b - i) - hat_integral(a - i)) * inv;
+      dw[s] = (hat(b - i) - hat(a - i)) * inv / ax.h;
+    }
+  }
+};
+
+template <int P>
+struct BSpline {
+  static constexpr int support = P + 1;
+  static constexpr int degree = P;
+  static constexpr bool bspline = true;
+  static constexpr const char* name = P == 2 ? "bspline2" : "bspline3";
+  static void eval(const Axis& ax, double x, double /*l_p*/, int& base, double* w, double* dw) {
+    const double u = (x - ax.origin) / ax.h;  // in cells
+    const int n = ax.cells;
+    const int c = std::clamp(static_cast<int>(std::floor(u)), 0, n - 1);
+    base = c;                       // nonzero bases: c .. c + P
+    const int k = c + P;            // knot span index: t_k <= u < t_{k+1}
+    auto t = [&](int i) { return static_cast<double>(std::clamp(i - P, 0, n)); };
+    // N[d][i] = N_{k-d+i, d}(u), i = 0..d, built degree by degree.
+    double N[P + 1][P + 1] = {};
+    N[0][0] = 1.0;
+    for (int d = 1; d <= P; ++d) {
+      for (int i = 0; i <= d; ++i) {
+        const int j = k - d + i;
+        double val = 0.0;
+        if (i >= 1) {  // N_{j, d-1} = N[d-1][i-1]
+          const double den = t(j + d) - t(j);
+          if (den > 0.0) val += (u - t(j)) / den * N[d - 1][i - 1];
+        }
+        if (i <= d - 1) {  // N_{j+1, d-1} = N[d-1][i]
+          const double den = t(j + d + 1) - t(j + 1);
+          if (den > 0.0) val += (t(j + d + 1) - u) / den * N[d - 1][i];
+        }
+        N[d][i] = val;
+      }
+    }
+    for (int i = 0; i <= P; ++i) {
+      const int j = k - P + i;
+      w[i] = N[P][i];
+      double der = 0.0;
+      if (i >= 1) {
+        const double den = t(j + P) - t(j);
+        if (den > 0.0) der += P / den * N[P - 1][i - 1];
+      }
+      if (i <= P - 1) {
+        const double den = t(j + P + 1) - t(j + 1);
+        if (den > 0.0) der -= P / den * N[P - 1][i];
+      }
+      dw[i] = der / ax.h;
+    }
+  }
+};
+
+using BSpline2 = BSpline<2>;
+using BSpline3 = BSpline<3>;
+
+/// Per-particle shape data, computed once per step and reused by every transfer of that step.
+template <int Dim, int S>
+struct ShapeData {
+  std::array<int, Dim> base;
+  double w[Dim][S];
+  double dw[Dim][S];
+};
+
+/// Visits the S^Dim nodes of a particle: fn(flat node index, N_ip, grad N_ip).
+/// Node order is fixed (x fastest), so every sum over nodes has one summation order.
+template <int Dim, int S, class Fn>
+inline void for_each_node(const Grid<Dim>& g, const ShapeData<Dim, S>& sd, Fn&& fn) {
+  const auto& nn = g.nodes_per_axis();
+  if constexpr (Dim == 2) {
+    for (int b = 0; b < S; ++b) {
+      const std::size_t row = static_cast<std::size_t>(sd.base[1] + b) * nn[0] + sd.base[0];
+      for (int a = 0; a < S; ++a) {
+        const double N = sd.w[0][a] * sd.w[1][b];
+        Vec<2> dN(sd.dw[0][a] * sd.w[1][b], sd.w[0][a] * sd.dw[1][b]);
+        fn(row + a, N, dN);
+      }
+    }
+  } else {
+    for (int c = 0; c < S; ++c) {
+      for (int b = 0; b < S; ++b) {
+        const std::size_t row =
+            (static_cast<std::size_t>(sd.base[2] + c) * nn[1] + (sd.base[1] + b)) * nn[0] + sd.base[0];
+        const double wbc = sd.w[1][b] * sd.w[2][c];
+        for (int a = 0; a < S; ++a) {
+          const double N = sd.w[0][a] * wbc;
+          Vec<3> dN(sd.dw[0][a] * wbc, sd.w[0][a] * sd.dw[1][b] * sd.w[2][c],
+                    sd.w[0][a] * sd.w[1][b] * sd.dw[2][c]);
+          fn(row + a, N, dN);
+        }
+      }
+    }
+  }
+}
+
+/// Evaluates the shape data of a particle at x with half-sizes l_p.
+template <class Shape, int Dim>
+inline void evaluate(const Grid<Dim>& g, const Vec<Dim>& x, const Vec<Dim>& l_p,
+                     ShapeData<Dim, Shape::support>& sd) {
+  for (int a = 0; a < Dim; ++a) Shape::eval(g.axis(a), x[a], l_p[a], sd.base[a], sd.w[a], sd.dw[a]);
+}
+
+}  // namespace swmpm::shape
