@@ -12,8 +12,8 @@
 //                    verbatim (a unit test holds the two together);
 //   3. `schema_keys()` — every declared key, for the documentation test.
 // Rules that involve more than one key (a body naming a material, a geometry inside the grid, ...)
-// are checked by the section parsers after the tables. Every problem is collected, never thrown at
-// once; the parser throws one SceneError with one line per problem:
+// are checked by the section parsers after the tables. Problems are collected, not thrown one at a
+// time; at the end the parser throws one SceneError with one line per problem:
 //     "<label>: <JSON pointer>: got <what was found>, expected <what is allowed> [<unit>]".
 #include <muParser.h>
 
@@ -154,7 +154,7 @@ std::string shown(const json& v) {
   return s;
 }
 
-std::string quoted(const std::string& s) { return "\"" + s + "\""; }
+std::string in_quotes(const std::string& s) { return "\"" + s + "\""; }
 
 std::string fmt_vec(const Vec3& v, int dim) {
   std::string out = "[";
@@ -175,18 +175,21 @@ std::string escape(const std::string& key) {
 
 std::string item(const std::string& path, std::size_t i) { return path + "/" + std::to_string(i); }
 
-std::size_t levenshtein(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+/// Edit distance with adjacent transpositions (optimal string alignment): "snad" -> "sand" is 1.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
   for (std::size_t i = 1; i <= a.size(); ++i) {
-    cur[0] = i;
     for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t subst = prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
-      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, subst});
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      }
     }
-    std::swap(prev, cur);
   }
-  return prev[b.size()];
+  return d[a.size()][b.size()];
 }
 
 std::string lower(std::string s) {
@@ -199,7 +202,7 @@ std::optional<std::string> closest(const std::string& s, const std::vector<std::
   std::optional<std::string> best;
   std::size_t best_d = std::numeric_limits<std::size_t>::max();
   for (const auto& c : candidates) {
-    const std::size_t d = levenshtein(lower(s), lower(c));
+    const std::size_t d = edit_distance(lower(s), lower(c));
     if (d < best_d) best_d = d, best = c;
   }
   // Up to one edit per three characters, at least one, at most three.
@@ -210,7 +213,7 @@ std::optional<std::string> closest(const std::string& s, const std::vector<std::
 
 std::string did_you_mean(const std::string& s, const std::vector<std::string>& candidates) {
   const auto c = closest(s, candidates);
-  return c ? " (did you mean " + quoted(*c) + "?)" : "";
+  return c ? " (did you mean " + in_quotes(*c) + "?)" : "";
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -498,6 +501,10 @@ bool check_vertices(Ctx& c, const json& v, const std::string& path, const Key& k
 }
 
 // -- the tables -----------------------------------------------------------------------------------
+// Keys are written with designated initializers; fields left out keep their defaults on purpose.
+// GCC before 14 warns about that under -Wextra, hence the pragma around the tables only.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
 
 const Table& scene_table() {
   static const Table t{
@@ -518,13 +525,13 @@ const Table& scene_table() {
           {.name = "grid", .type = Type::object, .required = true,
            .meaning = "The background grid, see [grid](#grid)."},
           {.name = "materials", .type = Type::objects, .required = true,
-           .meaning = "Materials, see [materials](#materials).", .nonempty = true},
+           .meaning = "Materials, see [material](#material-every-model).", .nonempty = true},
           {.name = "bodies", .type = Type::objects, .required = true,
-           .meaning = "Bodies, see [bodies](#bodies).", .nonempty = true},
+           .meaning = "Bodies, see [body](#body).", .nonempty = true},
           {.name = "boundaries", .type = Type::objects, .def = json::array(),
-           .meaning = "Grid-face conditions, see [boundaries](#boundaries)."},
+           .meaning = "Grid-face conditions, see [boundary](#boundary)."},
           {.name = "loads", .type = Type::objects, .def = json::array(),
-           .meaning = "Surface loads on bodies, see [loads](#loads)."},
+           .meaning = "Surface loads on bodies, see [load](#load)."},
           {.name = "time", .type = Type::object, .required = true,
            .meaning = "End time and time step, see [time](#time)."},
           {.name = "output", .type = Type::object,
@@ -667,7 +674,7 @@ const Table& body_table() {
           {.name = "name", .type = Type::string, .required = true,
            .meaning = "Unique name; loads refer to it."},
           {.name = "geometry", .type = Type::object, .required = true,
-           .meaning = "Where the body is, see [geometry](#geometry)."},
+           .meaning = "Where the body is, see [geometry](#geometry-every-type)."},
           {.name = "solid", .type = Type::string,
            .meaning = "Name of a solid material (the skeleton)."},
           {.name = "fluid", .type = Type::string,
@@ -675,7 +682,7 @@ const Table& body_table() {
           {.name = "particles_per_cell", .type = Type::integer, .def = 2, .range = closed(1, 8),
            .meaning = "Particles per cell and direction (n^dimension per cell)."},
           {.name = "initial", .type = Type::object,
-           .meaning = "Initial state, see [initial](#initial).", .default_text = "all defaults"},
+           .meaning = "Initial state, see [initial state](#initial-state).", .default_text = "all defaults"},
       }};
   return t;
 }
@@ -824,7 +831,7 @@ const Table& output_table() {
           {.name = "monitor_interval", .def = 0.0, .range = non_negative, .unit = "s",
            .meaning = "Simulated time between rows of monitors.csv (0: every step)."},
           {.name = "monitors", .type = Type::objects, .def = json::array(),
-           .meaning = "Time histories, see [monitors](#monitors)."},
+           .meaning = "Time histories, see [monitor](#monitor)."},
       }};
   return t;
 }
@@ -844,7 +851,7 @@ const Table& monitor_table() {
           {.name = "phase", .type = Type::choice, .def = "solid", .values = {"solid", "fluid"},
            .meaning = "Which phase's particle (`fluid` needs a fluid in the scene)."},
           {.name = "quantities", .type = Type::choices, .required = true, .values = all_quantities(),
-           .meaning = "What to record; see [monitors](#monitors) for which need what.", .nonempty = true},
+           .meaning = "What to record; see [monitor rules](#monitor-rules) for which need what.", .nonempty = true},
       }};
   return t;
 }
@@ -881,6 +888,8 @@ const Table& stabilisation_table() {
       }};
   return t;
 }
+
+#pragma GCC diagnostic pop
 
 /// Every table, in the order of the reference.
 std::vector<const Table*> all_tables() {
@@ -994,9 +1003,9 @@ std::string unknown_key_message(const std::string& name, const std::vector<const
   std::vector<std::string> names;
   for (const Key* k : keys) names.push_back(k->name);
   if (const auto c = closest(name, names)) {
-    return "unknown key " + quoted(name) + ", did you mean " + quoted(*c) + "?";
+    return "unknown key " + in_quotes(name) + ", did you mean " + in_quotes(*c) + "?";
   }
-  return "unknown key " + quoted(name) + ", expected one of: " + join(names);
+  return "unknown key " + in_quotes(name) + ", expected one of: " + join(names);
 }
 
 /// Checks `j` against the union of `tables`. With report_unknown false, keys not in the tables are
@@ -1014,29 +1023,32 @@ Obj check_object(Ctx& c, const json& j, const std::string& path,
   for (const Table* t : tables) {
     for (const Key& k : t->keys) keys.push_back(&k);
   }
-  auto find = [&](const std::string& n) -> const Key* {
-    for (const Key* k : keys) {
-      if (k->name == n) return k;
-    }
-    return nullptr;
-  };
+  std::vector<std::string> names;
+  for (const Key* k : keys) names.push_back(k->name);
+
+  // Unknown keys first, to learn which declared keys they are probably misspellings of: a
+  // required key is then not also reported missing. Their lines go after the declared keys'.
+  std::vector<std::pair<std::string, std::string>> unknown;  // path, message
+  std::set<std::string> suggested;
   for (const auto& [name, value] : j.items()) {
     o.given.insert(name);
-    const Key* k = find(name);
-    if (k == nullptr) {
-      if (report_unknown) c.error(o.at(name), unknown_key_message(name, keys));
-      continue;
-    }
-    if (check_value(c, *k, value, o.at(name))) o.v[name] = value;
+    if (!report_unknown || contains(names, name)) continue;
+    unknown.emplace_back(o.at(name), unknown_key_message(name, keys));
+    if (const auto guess = closest(name, names)) suggested.insert(*guess);
   }
+  // Declared keys in table order, so that messages follow the reference.
   for (const Key* k : keys) {
-    if (j.contains(k->name)) continue;
-    if (k->required) {
-      c.error(o.at(k->name), "missing required key, expected " + expected(*k, c));
+    if (j.contains(k->name)) {
+      if (check_value(c, *k, j[k->name], o.at(k->name))) o.v[k->name] = j[k->name];
+    } else if (k->required) {
+      if (suggested.count(k->name) == 0) {
+        c.error(o.at(k->name), "missing required key, expected " + expected(*k, c));
+      }
     } else if (!k->def.is_null()) {
       o.v[k->name] = k->def;
     }
   }
+  for (const auto& [p, message] : unknown) c.error(p, message);
   return o;
 }
 
@@ -1116,7 +1128,7 @@ class SceneParser {
 
   bool check_face(const std::string& face, const std::string& path) {
     if (contains(faces(), face)) return true;
-    c_.error(path, "got " + quoted(face) + ", expected one of: " + join(faces()) +
+    c_.error(path, "got " + in_quotes(face) + ", expected one of: " + join(faces()) +
                        " (z faces exist only in 3D scenes)");
     return false;
   }
@@ -1198,7 +1210,7 @@ class SceneParser {
 
       if (!m.name.empty()) {
         if (first.count(m.name) != 0) {
-          c_.error(o.at("name"), "got " + quoted(m.name) + " again (also " + first[m.name] +
+          c_.error(o.at("name"), "got " + in_quotes(m.name) + " again (also " + first[m.name] +
                                      "), expected unique material names");
         } else {
           first[m.name] = o.at("name");
@@ -1253,7 +1265,7 @@ class SceneParser {
       for (const auto& m : s_.materials) {
         if (!m.name.empty()) all.push_back(m.name);
       }
-      c_.error(o.at(key), "got " + quoted(name) + ", no material has that name; expected " + kind +
+      c_.error(o.at(key), "got " + in_quotes(name) + ", no material has that name; expected " + kind +
                               " (defined: " + (all.empty() ? std::string("none") : join(all)) + ")" +
                               did_you_mean(name, all));
       return -1;
@@ -1261,7 +1273,7 @@ class SceneParser {
     const auto i = static_cast<std::size_t>(idx);
     if (!material_info_[i].known) return -1;  // its own model error was reported
     if ((s_.materials[i].model == MaterialModel::fluid) != fluid) {
-      c_.error(o.at(key), "got " + quoted(name) + ", a material of model \"" +
+      c_.error(o.at(key), "got " + in_quotes(name) + ", a material of model \"" +
                               to_string(s_.materials[i].model) + "\"; expected " + kind + " (" +
                               (fluid ? "fluids" : "solids") + ": " +
                               (wanted.empty() ? std::string("none") : join(wanted)) + ")");
@@ -1283,7 +1295,7 @@ class SceneParser {
       b.fluid = o.str("fluid");
       b.particles_per_cell = static_cast<int>(o.num("particles_per_cell", 2.0));
       if (o.is_object && !o.has("solid") && !o.has("fluid")) {
-        c_.error(p, "body " + quoted(b.name) +
+        c_.error(p, "body " + in_quotes(b.name) +
                         " has neither \"solid\" nor \"fluid\", expected at least one material name");
       }
       const int solid = check_material_ref(o, "solid", false);
@@ -1299,7 +1311,7 @@ class SceneParser {
 
       if (!b.name.empty()) {
         if (first.count(b.name) != 0) {
-          c_.error(o.at("name"), "got " + quoted(b.name) + " again (also " + first[b.name] +
+          c_.error(o.at("name"), "got " + in_quotes(b.name) + " again (also " + first[b.name] +
                                      "), expected unique body names");
         } else {
           first[b.name] = o.at("name");
@@ -1315,8 +1327,8 @@ class SceneParser {
   void check_saturated_solid(std::size_t idx, const Body& b, const std::string& body_path) {
     MaterialInfo& info = material_info_[idx];
     if (info.saturated_reported) return;
-    const std::string used = "material " + quoted(s_.materials[idx].name) +
-                             " is the solid of saturated body " + quoted(b.name) + " (" + body_path + ")";
+    const std::string used = "material " + in_quotes(s_.materials[idx].name) +
+                             " is the solid of saturated body " + in_quotes(b.name) + " (" + body_path + ")";
     if (!info.gives_grain_density || !info.gives_porosity) {
       c_.error(info.path, used + ", expected \"grain_density\" and \"porosity\" (a porous skeleton)" +
                               (info.gives_density ? " instead of \"density\"" : ""));
@@ -1339,7 +1351,7 @@ class SceneParser {
     g.type = o.str("type");
     if (!o.ok("type")) return std::nullopt;
     if (!implemented) {
-      c_.error(o.at("type"), quoted(type) + " is not implemented yet in this version (available: " +
+      c_.error(o.at("type"), in_quotes(type) + " is not implemented yet in this version (available: " +
                                  join(implemented_geometry_types()) + ")");
       return std::nullopt;
     }
@@ -1399,7 +1411,7 @@ class SceneParser {
       if (pp.is_number()) in.pore_pressure = pp.get<double>();
       else in.hydrostatic = true;
       if (b.fluid.empty()) {
-        c_.error(o.at("pore_pressure"), "got " + shown(pp) + " for body " + quoted(b.name) +
+        c_.error(o.at("pore_pressure"), "got " + shown(pp) + " for body " + in_quotes(b.name) +
                                             " without a fluid, expected no pore_pressure (or a body \"fluid\")");
       }
     }
@@ -1442,7 +1454,7 @@ class SceneParser {
       bc.on = o.str("on");
       if (o.ok("on") && check_face(bc.on, o.at("on"))) {
         if (first.count(bc.on) != 0) {
-          c_.error(o.at("on"), "got " + quoted(bc.on) + " again (also " + first[bc.on] +
+          c_.error(o.at("on"), "got " + in_quotes(bc.on) + " again (also " + first[bc.on] +
                                    "), expected each face at most once");
         } else {
           first[bc.on] = o.at("on");
@@ -1463,7 +1475,7 @@ class SceneParser {
         const auto& fluids = fluid_bc_names();
         bc.fluid = static_cast<FluidBc>(std::find(fluids.begin(), fluids.end(), o.str("fluid")) - fluids.begin());
         if (!s_.has_fluid()) {
-          c_.error(o.at("fluid"), "got " + quoted(o.str("fluid")) +
+          c_.error(o.at("fluid"), "got " + in_quotes(o.str("fluid")) +
                                       ", but the scene has no fluid phase (no body has a \"fluid\"); "
                                       "expected no fluid condition");
         }
@@ -1492,7 +1504,7 @@ class SceneParser {
       l.body = o.str("body");
       l.face = o.str("face");
       if (o.ok("body") && !contains(bodies, l.body)) {
-        c_.error(o.at("body"), "got " + quoted(l.body) + ", expected the name of a body (defined: " +
+        c_.error(o.at("body"), "got " + in_quotes(l.body) + ", expected the name of a body (defined: " +
                                    (bodies.empty() ? std::string("none") : join(bodies)) + ")" +
                                    did_you_mean(l.body, bodies));
       }
@@ -1577,14 +1589,14 @@ class SceneParser {
           const std::string qp = item(m.at("quantities"), k);
           check_quantity(q, global, qp);
           if (contains(mon.quantities, q)) {
-            c_.error(qp, "got " + quoted(q) + " twice, expected each quantity at most once");
+            c_.error(qp, "got " + in_quotes(q) + " twice, expected each quantity at most once");
           }
           mon.quantities.push_back(q);
         }
       }
       if (!mon.name.empty()) {
         if (first.count(mon.name) != 0) {
-          c_.error(m.at("name"), "got " + quoted(mon.name) + " again (also " + first[mon.name] +
+          c_.error(m.at("name"), "got " + in_quotes(mon.name) + " again (also " + first[mon.name] +
                                      "), expected unique monitor names");
         } else {
           first[mon.name] = m.at("name");
@@ -1597,19 +1609,19 @@ class SceneParser {
   void check_quantity(const std::string& q, bool global, const std::string& path) {
     const bool is_global = contains(global_quantities(), q);
     if (global && !is_global) {
-      c_.error(path, "got " + quoted(q) + ", a point quantity, but the monitor has neither \"at\" nor "
+      c_.error(path, "got " + in_quotes(q) + ", a point quantity, but the monitor has neither \"at\" nor "
                      "\"particle\"; expected \"at\" or \"particle\", or a global quantity (" +
                          join(global_quantities()) + ")");
     } else if (!global && is_global) {
-      c_.error(path, "got " + quoted(q) + ", a global quantity, expected a point quantity (global "
+      c_.error(path, "got " + in_quotes(q) + ", a global quantity, expected a point quantity (global "
                      "quantities belong to a monitor without \"at\" and \"particle\")");
     }
     if (dim() == 2 && is_3d_only_quantity(q)) {
-      c_.error(path, "got " + quoted(q) + " in a 2D scene, expected a quantity without a z component "
+      c_.error(path, "got " + in_quotes(q) + " in a 2D scene, expected a quantity without a z component "
                      "(z components exist only in 3D; stress_zz is the plane-strain out-of-plane stress)");
     }
     if (needs_fluid_quantity(q) && !s_.has_fluid()) {
-      c_.error(path, "got " + quoted(q) + ", but the scene has no fluid phase (no body has a \"fluid\"); "
+      c_.error(path, "got " + in_quotes(q) + ", but the scene has no fluid phase (no body has a \"fluid\"); "
                      "expected a solid quantity");
     }
   }
@@ -1650,13 +1662,13 @@ class SceneParser {
       return;
     }
     s_.formulation = f;
-    s_.formulation_reason = quoted(name) + " as named in the scene file";
+    s_.formulation_reason = in_quotes(name) + " as named in the scene file";
     if (f == Formulation::dry && fluid) {
-      c_.error(path, "got \"dry\", but body " + quoted(fluid_body) + " (" + fluid_body_path +
+      c_.error(path, "got \"dry\", but body " + in_quotes(fluid_body) + " (" + fluid_body_path +
                          ") has a fluid; expected a coupled formulation (e.g. \"explicit-single-point\") "
                          "or \"auto\"");
     } else if (f != Formulation::dry && !fluid) {
-      c_.error(path, "got " + quoted(name) + ", but no body has a fluid; expected \"dry\" (or \"auto\")");
+      c_.error(path, "got " + in_quotes(name) + ", but no body has a fluid; expected \"dry\" (or \"auto\")");
     }
   }
 };
@@ -1713,6 +1725,51 @@ std::string markdown_allowed(const Key& k) {
   }
 }
 
+/// Finds keys written twice in one object while the text is parsed (a JSON value keeps only the
+/// last, which would silently drop the first). Tracks the JSON pointer of the current position.
+struct DuplicateKeys {
+  std::string label;
+  std::vector<std::string> lines;
+  struct Frame {
+    bool array = false;
+    std::string key;          // object: the current key
+    std::size_t index = 0;    // array: the index of the current element
+    std::set<std::string> keys;
+  };
+  std::vector<Frame> frames;
+
+  std::string pointer() const {
+    std::string p;
+    for (const Frame& f : frames) p += "/" + (f.array ? std::to_string(f.index) : escape(f.key));
+    return p;
+  }
+  void element_done() {
+    if (!frames.empty() && frames.back().array) ++frames.back().index;
+  }
+  void on_event(json::parse_event_t event, const json& parsed) {
+    using E = json::parse_event_t;
+    switch (event) {
+      case E::object_start: frames.push_back({false, "", 0, {}}); break;
+      case E::array_start: frames.push_back({true, "", 0, {}}); break;
+      case E::key: {
+        Frame& f = frames.back();
+        f.key = parsed.get<std::string>();
+        if (!f.keys.insert(f.key).second) {
+          lines.push_back(label + ": " + pointer() + ": got key " + in_quotes(f.key) +
+                          " twice in one object, expected each key once");
+        }
+        break;
+      }
+      case E::object_end:
+      case E::array_end:
+        frames.pop_back();
+        element_done();
+        break;
+      case E::value: element_done(); break;
+    }
+  }
+};
+
 }  // namespace
 
 Scene parse_scene(const nlohmann::json& j, const std::string& label) {
@@ -1729,8 +1786,13 @@ Scene load_scene(const std::string& path) {
   if (in.bad()) throw SceneError({path + ": cannot read the scene file"});
   const std::string text = buf.str();
   json j;
+  DuplicateKeys duplicates;
+  duplicates.label = path;
   try {
-    j = json::parse(text);
+    j = json::parse(text, [&duplicates](int, json::parse_event_t event, json& parsed) {
+      duplicates.on_event(event, parsed);
+      return true;
+    });
   } catch (const json::parse_error& e) {
     // Line and column of the byte where parsing failed (e.byte is 1-based).
     const std::size_t byte = e.byte == 0 ? 0 : e.byte - 1;
@@ -1745,7 +1807,18 @@ Scene load_scene(const std::string& path) {
     throw SceneError({path + ": invalid JSON at line " + std::to_string(line) + ", column " +
                       std::to_string(column) + " (byte " + std::to_string(e.byte) + "): " + why});
   }
-  return parse_scene(j, path);
+  try {
+    Scene scene = parse_scene(j, path);
+    if (!duplicates.lines.empty()) throw SceneError(duplicates.lines);
+    return scene;
+  } catch (const SceneError& e) {
+    if (duplicates.lines.empty()) throw;
+    std::vector<std::string> lines = duplicates.lines;
+    for (const auto& l : e.lines()) {
+      if (!contains(lines, l)) lines.push_back(l);
+    }
+    throw SceneError(lines);
+  }
 }
 
 nlohmann::json to_json(const Scene& s) {

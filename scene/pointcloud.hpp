@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -19,14 +20,14 @@ struct PointArray {
 
 struct PointCloud {
   std::vector<std::array<double, 3>> points;  // m
-  std::vector<PointArray> arrays;
+  std::deque<PointArray> arrays;  // deque: references returned by add() stay valid
 
   std::size_t size() const { return points.size(); }
   /// The array of that name, or nullptr.
   const PointArray* find(const std::string& name) const;
   /// The array of that name; throws std::runtime_error naming the array and `where`.
   const PointArray& get(const std::string& name, const std::string& where) const;
-  /// Adds a zero-initialised array and returns it.
+  /// Adds a zero-initialised array (size points * components; set points first) and returns it.
   PointArray& add(const std::string& name, int components);
 };
 

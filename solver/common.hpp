@@ -7,9 +7,13 @@
 #include <cmath>
 #include <cstdint>
 
-#include <Eigen/Core>
+#include <Eigen/Dense>
 
 namespace swmpm {
+
+/// Loops over fewer particles than this run on one thread: below it, starting a parallel region
+/// costs more than the work. Results do not depend on it (the summation orders are fixed).
+inline constexpr long parallel_threshold = 2048;
 
 template <int Dim>
 using Vec = Eigen::Matrix<double, Dim, 1>;

@@ -206,7 +206,7 @@ class Runner {
     rj["particles"] = {{"solid", state_.solid.size()}};
     rj["active_cells"] = formulation->active_cells(state_);
     rj["steps"] = state_.step;
-    rj["dt"] = auto_dt ? dt_min : *scene_.time.dt;
+    rj["dt"] = auto_dt ? (state_.step ? state_.time / static_cast<double>(state_.step) : 0.0) : *scene_.time.dt;  // mean for "auto"
     rj["dt_min"] = state_.step ? dt_min : 0.0;
     rj["dt_max"] = dt_max;
     rj["dt_limit"] = dt_reason;

@@ -99,7 +99,7 @@ class Dry final : public Formulation<Dim> {
     }
     double v_max = 0.0;
     const long n = static_cast<long>(ps.size());
-#pragma omp parallel for reduction(max : v_max)
+#pragma omp parallel for reduction(max : v_max) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) v_max = std::max(v_max, ps.v[p].norm());
     reason = "P-wave CFL (c = " + std::to_string(c_max) + " m/s, |v|max = " + std::to_string(v_max) + " m/s)";
     return grid_.h() / (c_max + v_max);

@@ -50,7 +50,7 @@ double fixed_order_sum(std::size_t n, F&& f) {
   constexpr std::size_t chunk = 4096;
   const long chunks = static_cast<long>((n + chunk - 1) / chunk);
   std::vector<double> partial(chunks, 0.0);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (chunks > 1)
   for (long c = 0; c < chunks; ++c) {
     double sum = 0.0;
     for (std::size_t p = c * chunk; p < std::min(n, (c + 1) * chunk); ++p) sum += f(p);

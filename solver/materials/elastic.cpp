@@ -23,7 +23,7 @@ class LinearElastic final : public MaterialModel<Dim> {
   long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double dt) const override {
     long bad = kNoParticle;
     const long n = static_cast<long>(ids.size());
-#pragma omp parallel for schedule(static) reduction(min : bad)
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long k = 0; k < n; ++k) {
       const int p = ids[k];
       const Mat3 L = embed<Dim>(ps.L[p]);
@@ -61,7 +61,7 @@ class Hencky final : public MaterialModel<Dim> {
   long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double) const override {
     long bad = kNoParticle;
     const long n = static_cast<long>(ids.size());
-#pragma omp parallel for schedule(static) reduction(min : bad)
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long k = 0; k < n; ++k) {
       const int p = ids[k];
       const Mat3& F = ps.F[p];

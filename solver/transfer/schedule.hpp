@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <vector>
 
+#include "solver/common.hpp"
+
 namespace swmpm {
 
 class StripeSchedule {
@@ -36,7 +38,7 @@ class StripeSchedule {
   template <class Fn>
   void run(Fn&& fn) const {
     for (int colour = 0; colour < 2; ++colour) {
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (static_cast<long>(order_.size()) > parallel_threshold)
       for (int s = colour; s < stripes_; s += 2)
         for (int k = start_[s]; k < start_[s + 1]; ++k) fn(order_[k]);
     }

@@ -31,7 +31,7 @@ NodeBox<Dim> evaluate_shapes(const Grid<Dim>& g, const ParticleSet<Dim>& ps,
   hi.fill(std::numeric_limits<int>::min());
   const Vec<Dim> gmin = g.min(), gmax = g.max();
   long first_bad = no_particle;
-#pragma omp parallel
+#pragma omp parallel if (n > parallel_threshold)
   {
     std::array<int, Dim> tlo = lo, thi = hi;
     long tbad = no_particle;
@@ -135,7 +135,7 @@ void gather_velocity_position(const Grid<Dim>& g, const NodeFields<Dim>& nf,
                               const std::vector<shape::ShapeData<Dim, S>>& sd, double dt, double flip,
                               ParticleSet<Dim>& ps) {
   const long n = static_cast<long>(ps.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
   for (long p = 0; p < n; ++p) {
     Vec<Dim> v_new = Vec<Dim>::Zero(), dv = Vec<Dim>::Zero();
     shape::for_each_node(g, sd[p], [&](std::size_t i, double N, const Vec<Dim>&) {
@@ -155,7 +155,7 @@ long gather_velocity_gradient(const Grid<Dim>& g, const NodeFields<Dim>& nf,
                               ParticleSet<Dim>& ps) {
   const long n = static_cast<long>(ps.size());
   long bad = no_particle;
-#pragma omp parallel for schedule(static) reduction(min : bad)
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
   for (long p = 0; p < n; ++p) {
     MatD<Dim> L = MatD<Dim>::Zero();
     shape::for_each_node(g, sd[p], [&](std::size_t i, double, const Vec<Dim>& dN) {

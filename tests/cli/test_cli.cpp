@@ -1,0 +1,168 @@
+// The `swmpm` command as a user meets it: bad scenes give one line per problem naming the JSON
+// path, a non-zero status and no run directory; a diverging run stops with a diagnosis, status 3,
+// and leaves the last good state as a finite final frame.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "support/run_helpers.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct Result {
+  int status;
+  std::string out, err;
+};
+
+Result swmpm_cmd(const std::string& args, const fs::path& dir) {
+  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
+  const std::string cmd = std::string(SWMPM_EXE) + " " + args + " > " + out + " 2> " + err;
+  const int raw = std::system(cmd.c_str());
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, swmpm::testing::read_text(out), swmpm::testing::read_text(err)};
+}
+
+json good_scene() { return swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/elastic-column/scene.json"); }
+
+/// Runs preprocess on a broken scene; expects failure naming `path`, one line, nothing written.
+void expect_rejected(const json& scene, const std::string& name, const std::string& path, const std::string& phrase) {
+  const fs::path dir = swmpm::testing::scratch("bad-" + name);
+  std::ofstream(dir / "scene.json") << scene.dump(2);
+  const fs::path run = dir / "run";
+  const Result r = swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run.string(), dir);
+  EXPECT_NE(r.status, 0) << name;
+  EXPECT_NE(r.err.find(path), std::string::npos) << name << ": stderr was: " << r.err;
+  EXPECT_NE(r.err.find(phrase), std::string::npos) << name << ": stderr was: " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << name << ": expected one line: " << r.err;
+  EXPECT_NE(r.err.find("scene.json"), std::string::npos) << name << ": the line names the file";
+  EXPECT_FALSE(fs::exists(run)) << name << ": nothing may be written";
+}
+
+}  // namespace
+
+TEST(BadInput, UnknownKeyWithSuggestion) {
+  json s = good_scene();
+  s["materials"][0].erase("youngs_modulus");
+  s["materials"][0]["youngs_modulu"] = 1e6;
+  // Two problems (unknown key, missing required key) -> checked separately below; here only the typo.
+  const fs::path dir = swmpm::testing::scratch("bad-unknown");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const Result r = swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("/materials/0/youngs_modulu"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("did you mean \"youngs_modulus\""), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "run"));
+}
+
+TEST(BadInput, UnknownTopLevelKey) {
+  json s = good_scene();
+  s["gravty"] = {0, -9.81};
+  expect_rejected(s, "toplevel", "/gravty", "did you mean \"gravity\"");
+}
+
+TEST(BadInput, WrongType) {
+  json s = good_scene();
+  s["grid"]["cell_size"] = "0.05";
+  expect_rejected(s, "type", "/grid/cell_size", "0.05");
+}
+
+TEST(BadInput, WrongVectorLength) {
+  json s = good_scene();
+  s["gravity"] = {0.0, -9.81, 0.0};
+  expect_rejected(s, "veclen", "/gravity", "2");
+}
+
+TEST(BadInput, OutOfRange) {
+  json s = good_scene();
+  s["materials"][0]["poisson_ratio"] = 0.7;
+  expect_rejected(s, "range", "/materials/0/poisson_ratio", "0.7");
+}
+
+TEST(BadInput, DanglingMaterialName) {
+  json s = good_scene();
+  s["bodies"][0]["solid"] = "sand";
+  expect_rejected(s, "dangling", "/bodies/0/solid", "soil");
+}
+
+TEST(BadInput, BodyOutsideTheGrid) {
+  json s = good_scene();
+  s["bodies"][0]["geometry"]["max"] = {0.1, 1.5};
+  expect_rejected(s, "outside", "/bodies/0/geometry", "grid");
+}
+
+TEST(BadInput, UnknownEnumValue) {
+  json s = good_scene();
+  s["grid"]["shape_function"] = "cubic";
+  expect_rejected(s, "enum", "/grid/shape_function", "bspline3");
+}
+
+TEST(BadInput, SeveralProblemsAreAllListed) {
+  json s = good_scene();
+  s["grid"]["cell_size"] = -1.0;
+  s["materials"][0]["poisson_ratio"] = 0.5;
+  s["time"]["end"] = 0.0;
+  const fs::path dir = swmpm::testing::scratch("bad-several");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const Result r = swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
+  EXPECT_NE(r.status, 0);
+  for (const char* path : {"/grid/cell_size", "/materials/0/poisson_ratio", "/time/end"})
+    EXPECT_NE(r.err.find(path), std::string::npos) << path << " in " << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 3) << r.err;
+}
+
+TEST(BadInput, MissingFileAndInvalidJson) {
+  const fs::path dir = swmpm::testing::scratch("bad-file");
+  Result r = swmpm_cmd("preprocess " + (dir / "nope.json").string(), dir);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("nope.json"), std::string::npos) << r.err;
+  std::ofstream(dir / "broken.json") << "{ \"name\": \"x\", ";
+  r = swmpm_cmd("preprocess " + (dir / "broken.json").string(), dir);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("broken.json"), std::string::npos) << r.err;
+  r = swmpm_cmd("solve " + (dir / "not-a-run").string(), dir);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("not a run directory"), std::string::npos) << r.err;
+}
+
+TEST(Cli, VersionAndHelp) {
+  const fs::path dir = swmpm::testing::scratch("cli");
+  Result r = swmpm_cmd("--version", dir);
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("swmpm 0."), std::string::npos) << r.out;
+  for (const char* sub : {"preprocess", "solve", "postprocess", "run", "element"}) {
+    r = swmpm_cmd(std::string(sub) + " --help", dir);
+    EXPECT_EQ(r.status, 0) << sub;
+    EXPECT_FALSE(r.out.empty()) << sub;
+  }
+}
+
+TEST(Divergence, StopsWithDiagnosisAndKeepsLastGoodState) {
+  // The column with dt 20x its CFL limit (~9e-4 s): it blows up within a few dozen steps.
+  json s = good_scene();
+  s["time"]["dt"] = 2.0e-2;
+  s["solver"]["checkpoint_every"] = 1;
+  const fs::path dir = swmpm::testing::scratch("diverge");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const fs::path run = dir / "run";
+  const Result r = swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + run.string(), dir);
+  EXPECT_EQ(r.status, 3) << r.out << r.err;
+  const json rj = swmpm::testing::load_json((run / "run.json").string());
+  EXPECT_EQ(rj["status"], "diverged");
+  const std::string why = rj["diagnosis"];
+  EXPECT_NE(why.find("particle"), std::string::npos) << why;
+  EXPECT_NE(why.find("t = "), std::string::npos) << why;
+  EXPECT_NE(swmpm::testing::read_text((run / "log.txt").string()).find("DIVERGED"), std::string::npos);
+  // The last frame is the last good state: all finite, inside the grid.
+  const auto frame = swmpm::testing::last_frame(run.string());
+  ASSERT_GT(frame.size(), 0u);
+  for (const auto& x : frame.points) {
+    EXPECT_TRUE(std::isfinite(x[0]) && std::isfinite(x[1]));
+    EXPECT_GE(x[1], 0.0);
+    EXPECT_LE(x[1], 1.1);
+  }
+  for (double v : frame.get("stress", "frame").values) ASSERT_TRUE(std::isfinite(v));
+}

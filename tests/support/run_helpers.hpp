@@ -1,0 +1,59 @@
+// Helpers for tests that run the whole pipeline in-process: write a scene, preprocess, solve, read
+// back monitors.csv and frames exactly as a user's script would.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "postprocess/postprocess.hpp"
+#include "preprocess/preprocess.hpp"
+#include "scene/pointcloud.hpp"
+#include "solver/run.hpp"
+
+namespace swmpm::testing {
+
+namespace fs = std::filesystem;
+
+inline fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "swmpm-tests" / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+/// Writes `scene` under a scratch folder, runs preprocess + solve; returns the run directory.
+inline std::string run_scene(const nlohmann::json& scene, const std::string& name, int threads = 0,
+                             int* status = nullptr) {
+  const fs::path dir = scratch(name);
+  const fs::path scene_file = dir / "scene.json";
+  std::ofstream(scene_file) << scene.dump(2);
+  const std::string run_dir = swmpm::pre::preprocess(scene_file.string(), (dir / "run").string(), true);
+  const int rc = swmpm::solve(run_dir, {threads, true});
+  if (status) *status = rc;
+  else EXPECT_EQ(rc, 0) << "solve failed for " << name;
+  return run_dir;
+}
+
+inline nlohmann::json load_json(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+/// The last frame of the run's results.pvd.
+inline scene::PointCloud last_frame(const std::string& run_dir) {
+  const auto entries = scene::read_pvd(run_dir + "/output/results.pvd");
+  EXPECT_FALSE(entries.empty());
+  return scene::read_vtu(run_dir + "/output/" + entries.back().file);
+}
+
+inline std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+}  // namespace swmpm::testing

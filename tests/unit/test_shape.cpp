@@ -1,0 +1,161 @@
+// Shape functions: partition of unity, zero gradient sum, linear reproduction (where it holds),
+// derivative consistency and boundary interpolation, in 2D and 3D.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "solver/shape/shape.hpp"
+
+using namespace swmpm;
+
+namespace {
+
+template <int Dim, class Shape>
+struct Case {
+  static Grid<Dim> grid() {
+    Vec<Dim> lo, hi;
+    for (int a = 0; a < Dim; ++a) {
+      lo[a] = -0.3 + 0.1 * a;
+      hi[a] = lo[a] + 0.25 * (5 + a);  // 5, 6, 7 cells of 0.25
+    }
+    return Grid<Dim>(lo, hi, 0.25, Shape::degree, Shape::bspline);
+  }
+};
+
+/// Checks sum N = 1, sum grad N = 0 and, where `linear`, sum N x_i = x and sum x_i grad N^T = I.
+template <int Dim, class Shape>
+void check_point(const Grid<Dim>& g, const Vec<Dim>& x, double l_p, bool linear) {
+  shape::ShapeData<Dim, Shape::support> sd;
+  Vec<Dim> l = Vec<Dim>::Constant(l_p);
+  shape::evaluate<Shape>(g, x, l, sd);
+  double sum = 0.0;
+  Vec<Dim> grad_sum = Vec<Dim>::Zero(), x_rep = Vec<Dim>::Zero();
+  MatD<Dim> grad_rep = MatD<Dim>::Zero();
+  // Decode flat node indices back to positions.
+  shape::for_each_node(g, sd, [&](std::size_t i, double N, const Vec<Dim>& dN) {
+    std::array<int, Dim> ijk;
+    std::size_t r = i;
+    for (int a = 0; a < Dim; ++a) {
+      ijk[a] = static_cast<int>(r % g.nodes_per_axis()[a]);
+      r /= g.nodes_per_axis()[a];
+    }
+    ASSERT_GE(N, -1e-14);
+    const Vec<Dim> xi = g.node_position(ijk);
+    sum += N;
+    grad_sum += dN;
+    x_rep += N * xi;
+    grad_rep += xi * dN.transpose();
+  });
+  EXPECT_NEAR(sum, 1.0, 1e-13) << Shape::name << " at " << x.transpose();
+  EXPECT_NEAR(grad_sum.norm(), 0.0, 1e-11) << Shape::name << " at " << x.transpose();
+  if (linear) {
+    EXPECT_NEAR((x_rep - x).norm(), 0.0, 1e-13) << Shape::name << " at " << x.transpose();
+    EXPECT_NEAR((grad_rep - MatD<Dim>::Identity()).norm(), 0.0, 1e-11) << Shape::name << " at " << x.transpose();
+  }
+}
+
+template <int Dim, class Shape>
+void check_shape(bool linear_everywhere) {
+  const Grid<Dim> g = Case<Dim, Shape>::grid();
+  std::mt19937 rng(42);
+  const double h = g.h();
+  const double l_p = 0.25 * h;  // 2 particles per cell
+  for (int k = 0; k < 400; ++k) {
+    Vec<Dim> x;
+    for (int a = 0; a < Dim; ++a) x[a] = std::uniform_real_distribution<double>(g.min()[a], g.max()[a])(rng);
+    // GIMP reproduces linear fields where the particle domain lies inside the grid.
+    bool interior = true;
+    for (int a = 0; a < Dim; ++a) interior = interior && x[a] - l_p >= g.min()[a] && x[a] + l_p <= g.max()[a];
+    check_point<Dim, Shape>(g, x, l_p, linear_everywhere || interior);
+  }
+  // Exactly on the boundary and on nodes.
+  check_point<Dim, Shape>(g, g.min(), l_p, linear_everywhere);
+  check_point<Dim, Shape>(g, g.max(), l_p, linear_everywhere);
+}
+
+}  // namespace
+
+TEST(ShapeFunctions, Linear2D) { check_shape<2, shape::Linear>(true); }
+TEST(ShapeFunctions, Linear3D) { check_shape<3, shape::Linear>(true); }
+TEST(ShapeFunctions, Gimp2D) { check_shape<2, shape::Gimp>(false); }
+TEST(ShapeFunctions, Gimp3D) { check_shape<3, shape::Gimp>(false); }
+TEST(ShapeFunctions, BSpline2_2D) { check_shape<2, shape::BSpline2>(true); }
+TEST(ShapeFunctions, BSpline2_3D) { check_shape<3, shape::BSpline2>(true); }
+TEST(ShapeFunctions, BSpline3_2D) { check_shape<2, shape::BSpline3>(true); }
+TEST(ShapeFunctions, BSpline3_3D) { check_shape<3, shape::BSpline3>(true); }
+
+/// One-dimensional derivatives agree with central differences of the weights (inside a cell).
+template <class Shape>
+void check_derivative() {
+  Axis ax;
+  ax.origin = 0.0;
+  ax.h = 0.5;
+  ax.cells = 6;
+  ax.nodes = Shape::bspline ? ax.cells + Shape::degree : ax.cells + 1;
+  const double eps = 1e-6;
+  for (double x = 0.013; x < 3.0; x += 0.0371) {
+    int b0, bp, bm;
+    double w[Shape::support], dw[Shape::support], wp[Shape::support], wm[Shape::support], tmp[Shape::support];
+    Shape::eval(ax, x, 0.125, b0, w, dw);
+    Shape::eval(ax, x + eps, 0.125, bp, wp, tmp);
+    Shape::eval(ax, x - eps, 0.125, bm, wm, tmp);
+    if (bp != b0 || bm != b0) continue;  // crossed a span: skip
+    // Clipped GIMP domains (within l_p of the boundary) use the domain-average gradient instead.
+    if (!Shape::bspline && Shape::support == 3 && (x < 0.125 + eps || x > 3.0 - 0.125 - eps)) continue;
+    for (int s = 0; s < Shape::support; ++s)
+      EXPECT_NEAR(dw[s], (wp[s] - wm[s]) / (2 * eps), 1e-6) << Shape::name << " x=" << x << " s=" << s;
+  }
+}
+
+TEST(ShapeFunctions, DerivativesMatchFiniteDifferences) {
+  check_derivative<shape::Linear>();
+  check_derivative<shape::Gimp>();
+  check_derivative<shape::BSpline2>();
+  check_derivative<shape::BSpline3>();
+}
+
+/// Clamped B-splines are interpolatory at the boundary: only the first/last node is non-zero there,
+/// so a Dirichlet condition on that node holds exactly on the boundary.
+TEST(ShapeFunctions, BSplinesInterpolateAtBoundary) {
+  for (int p : {2, 3}) {
+    Axis ax;
+    ax.origin = 1.0;
+    ax.h = 0.1;
+    ax.cells = 8;
+    ax.nodes = ax.cells + p;
+    int base;
+    double w[4], dw[4];
+    auto eval = [&](double x) {
+      if (p == 2) shape::BSpline2::eval(ax, x, 0.0, base, w, dw);
+      else shape::BSpline3::eval(ax, x, 0.0, base, w, dw);
+    };
+    eval(1.0);
+    EXPECT_EQ(base, 0);
+    EXPECT_NEAR(w[0], 1.0, 1e-15);
+    for (int s = 1; s <= p; ++s) EXPECT_NEAR(w[s], 0.0, 1e-15);
+    eval(1.8);
+    EXPECT_EQ(base + p, ax.nodes - 1);
+    EXPECT_NEAR(w[p], 1.0, 1e-15);
+  }
+}
+
+/// Uniform interior B-spline values: quadratic at a node 1/8, 3/4, 1/8; cubic 1/6, 2/3, 1/6.
+TEST(ShapeFunctions, BSplineInteriorValues) {
+  Axis ax;
+  ax.origin = 0.0;
+  ax.h = 1.0;
+  ax.cells = 10;
+  int base;
+  double w[4], dw[4];
+  ax.nodes = ax.cells + 2;
+  shape::BSpline2::eval(ax, 5.5, 0.0, base, w, dw);  // quadratic nodes sit at cell centres inside
+  EXPECT_NEAR(w[0], 0.125, 1e-14);
+  EXPECT_NEAR(w[1], 0.75, 1e-14);
+  EXPECT_NEAR(w[2], 0.125, 1e-14);
+  ax.nodes = ax.cells + 3;
+  shape::BSpline3::eval(ax, 5.0, 0.0, base, w, dw);
+  EXPECT_NEAR(w[0], 1.0 / 6.0, 1e-14);
+  EXPECT_NEAR(w[1], 2.0 / 3.0, 1e-14);
+  EXPECT_NEAR(w[2], 1.0 / 6.0, 1e-14);
+  EXPECT_NEAR(w[3], 0.0, 1e-14);
+}

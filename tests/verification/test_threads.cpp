@@ -1,0 +1,53 @@
+// --threads must not change results: a 2D block under a ramped gravity and a partial traction,
+// with friction at the base, run with 1 and 2 threads, gives bitwise identical monitors.csv and
+// final frames. The block has 8000 particles (above solver/common.hpp's parallel_threshold) on a
+// grid 120 cells wide, so the scatter schedule has many stripes to share between the threads.
+#include <gtest/gtest.h>
+
+#include "support/run_helpers.hpp"
+
+namespace {
+
+nlohmann::json block_scene() {
+  return nlohmann::json::parse(R"({
+    "name": "threads", "dimension": 2, "formulation": "dry",
+    "gravity": [0.0, -9.81], "gravity_ramp": 0.05,
+    "grid": { "cell_size": 0.05, "min": [0.0, 0.0], "max": [6.0, 1.5], "shape_function": "gimp" },
+    "materials": [ { "name": "m", "model": "hencky", "density": 2000.0,
+                     "youngs_modulus": 5.0e6, "poisson_ratio": 0.3 } ],
+    "bodies": [ { "name": "block", "geometry": { "type": "box", "min": [0.5, 0.0], "max": [5.5, 1.0] },
+                  "solid": "m", "particles_per_cell": 2 } ],
+    "boundaries": [ { "on": "y_min", "solid": "friction", "coefficient": 0.3 },
+                    { "on": "x_min", "solid": "roller" }, { "on": "x_max", "solid": "roller" } ],
+    "loads": [ { "type": "traction", "body": "block", "face": "y_max", "value": [2.0e3, -2.0e4],
+                 "region": { "min": [1.0, 0.9], "max": [2.0, 1.0] }, "ramp": 0.05 } ],
+    "time": { "end": 0.06, "dt": "auto", "cfl": 0.5 },
+    "output": { "interval": 0.03, "monitors": [
+      { "name": "p", "at": [1.5, 1.0], "phase": "solid", "quantities": ["displacement_x", "displacement_y", "stress_yy"] },
+      { "name": "energy", "quantities": ["kinetic_energy", "strain_energy", "external_work"] } ] }
+  })");
+}
+
+}  // namespace
+
+TEST(Threads, OneAndTwoThreadsGiveIdenticalResults) {
+  const std::string one = swmpm::testing::run_scene(block_scene(), "threads1", 1);
+  const std::string two = swmpm::testing::run_scene(block_scene(), "threads2", 2);
+  const std::string m1 = swmpm::testing::read_text(one + "/monitors.csv");
+  const std::string m2 = swmpm::testing::read_text(two + "/monitors.csv");
+  ASSERT_GT(m1.size(), 1000u);
+  EXPECT_EQ(m1, m2);
+  const auto f1 = swmpm::testing::last_frame(one);
+  const auto f2 = swmpm::testing::last_frame(two);
+  ASSERT_EQ(f1.size(), f2.size());
+  for (std::size_t p = 0; p < f1.size(); ++p)
+    for (int a = 0; a < 3; ++a) ASSERT_EQ(f1.points[p][a], f2.points[p][a]) << "particle " << p;
+  const auto& s1 = f1.get("stress", "1").values;
+  const auto& s2 = f2.get("stress", "2").values;
+  for (std::size_t k = 0; k < s1.size(); ++k) ASSERT_EQ(s1[k], s2[k]) << "stress entry " << k;
+  // The run did something: the loaded area moved.
+  const auto run = swmpm::testing::load_json(one + "/run.json");
+  EXPECT_EQ(run["status"], "completed");
+  EXPECT_GT(run["steps"].get<long>(), 50);
+  EXPECT_EQ(run["particles"]["solid"].get<long>(), 8000);
+}
