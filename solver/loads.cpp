@@ -104,7 +104,7 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const ParticleSet<Dim>&
     const int f = face_index(load.face);
     const int axis = f / 2;
     const double outward = f % 2 == 0 ? -1.0 : 1.0;
-    Entry e{{}, {}, TimeFunction(load.function)};
+    Entry e{{}, {}, {}, TimeFunction(load.function)};
     for (std::size_t p = 0; p < ps.size(); ++p) {
       if (ps.body[p] != body || !(ps.faces[p] & (1u << f))) continue;
       if (load.region) {
@@ -121,8 +121,11 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const ParticleSet<Dim>&
       if (load.type == "pressure") force[axis] = -outward * load.value[0] * area;  // pushes inward
       else
         for (int a = 0; a < Dim; ++a) force[a] = load.value[a] * area;
+      Vec<Dim> offset = Vec<Dim>::Zero();
+      offset[axis] = outward * ps.l[p][axis];
       e.particles.push_back(static_cast<int>(p));
       e.force.push_back(force);
+      e.offset.push_back(offset);
     }
     entries_.push_back(std::move(e));
   }

@@ -52,13 +52,17 @@ template <int Dim>
 class ParticleLoads {
  public:
   ParticleLoads(const scene::Scene& s, const ParticleSet<Dim>& ps);
-  /// Adds f_p(t) to ext[p] for every loaded particle (serial; few particles).
+  /// Calls fn(p, f_p(t), face offset) for every loaded particle (serial; few particles). The
+  /// force acts on the body's surface, at x_p + offset (the particle domain's face point), so
+  /// formulations evaluate the shape functions there rather than at the particle centre: a
+  /// traction then loads the nodes of the surface, not those around the first particle row.
   template <class Fn>
   void for_each_force(double t, Fn&& fn) const {
     for (const auto& e : entries_) {
       const double scale = e.fn(t);
       if (scale == 0.0) continue;
-      for (std::size_t k = 0; k < e.particles.size(); ++k) fn(e.particles[k], (scale * e.force[k]).eval());
+      for (std::size_t k = 0; k < e.particles.size(); ++k)
+        fn(e.particles[k], (scale * e.force[k]).eval(), e.offset[k]);
     }
   }
   std::size_t count() const { return entries_.size(); }
@@ -68,7 +72,8 @@ class ParticleLoads {
  private:
   struct Entry {
     std::vector<int> particles;
-    std::vector<Vec<Dim>> force;  // N (N/m in 2D) at f(t) = 1
+    std::vector<Vec<Dim>> force;   // N (N/m in 2D) at f(t) = 1
+    std::vector<Vec<Dim>> offset;  // m, from the particle centre to its face point
     TimeFunction fn;
   };
   std::vector<Entry> entries_;

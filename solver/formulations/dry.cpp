@@ -4,9 +4,9 @@
 //   (1) shape data at x_n, active node box, scatter schedule
 //   (2) P2G: m_i, (mv)_i, f_i = f_int + f_body                 (transfer::scatter_mass_momentum_force)
 //   (3) + tractions on face particles                          (ParticleLoads)
-//   (4) grid: vL_i = (mv)_i / m_i, local damping, v_i = vL_i + dt f_i / m_i, BCs on both
+//   (4) grid: vL_i = (mv)_i / m_i, local damping, v_i = vL_i + dt f_i / m_i, BCs on v_i
 //   (5) G2P: v_p (FLIP/PIC blend), x_p += dt sum N v_i
-//   (6) MUSL: remap momentum with the new v_p, v_i = (mv)_i / m_i, BCs
+//   (6) MUSL: remap momentum with the new v_p, v_i = (mv)_i / m_i, BCs   (fused with (5): one pass)
 //   (7) L_p = sum v_i (x) grad N_ip; F, V
 //   (8) stress update per material
 #include <omp.h>
@@ -60,20 +60,20 @@ class Dry final : public Formulation<Dim> {
     lap("shape functions");
 
     transfer::scatter_mass_momentum_force(grid_, schedule_, ps, sd_, b, nodes_);       // (2)
-    loads_.for_each_force(ctx.t, [&](int p, const Vec<Dim>& f_p) {                     // (3)
-      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) { nodes_.f[i] += N * f_p; });
+    loads_.for_each_force(ctx.t, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>& offset) {  // (3)
+      shape::ShapeData<Dim, S> face;  // shape functions at the particle's face point
+      const Vec<Dim> x_face = (ps.x[p] + offset).cwiseMax(grid_.min()).cwiseMin(grid_.max());
+      shape::evaluate<Shape>(grid_, x_face, Vec<Dim>::Zero().eval(), face);
+      shape::for_each_node(grid_, face, [&](std::size_t i, double N, const Vec<Dim>&) { nodes_.f[i] += N * f_p; });
     });
     lap("p2g");
 
     update_grid(dt);                                                                    // (4)
     lap("grid update");
 
-    transfer::gather_velocity_position(grid_, nodes_, sd_, dt, flip_, ps);              // (5)
-    lap("g2p");
-
-    transfer::scatter_momentum(grid_, schedule_, box_, ps, sd_, nodes_);                // (6)
+    transfer::gather_velocity_position_remap(grid_, schedule_, box_, sd_, dt, flip_, ps, nodes_);  // (5)-(6)
     bcs_.apply(grid_, box_, nodes_.v, false);
-    lap("musl remap");
+    lap("g2p + musl remap");
 
     bad = transfer::gather_velocity_gradient(grid_, nodes_, sd_, dt, ps);               // (7)
     if (bad >= 0) st.health.report(bad, "solid", "volume ratio J = det F <= 0 (or not finite)");
@@ -118,7 +118,7 @@ class Dry final : public Formulation<Dim> {
     Vec<Dim> b;
     for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
     double power = fixed_order_sum(ps.size(), [&](std::size_t p) { return ps.m[p] * b.dot(ps.v[p]); });
-    loads_.for_each_force(ctx.t, [&](int p, const Vec<Dim>& f_p) { power += f_p.dot(ps.v[p]); });
+    loads_.for_each_force(ctx.t, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&) { power += f_p.dot(ps.v[p]); });
     return power;
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
@@ -141,7 +141,9 @@ class Dry final : public Formulation<Dim> {
       nodes_.vL[i] = vL;
       nodes_.v[i] = vL + dt / m * f;
     });
-    bcs_.apply(grid_, box_, nodes_.vL, false);
+    // BCs act on the end-of-step velocity only: vL keeps the momentum the particles brought, so
+    // the FLIP increment v - vL removes what a wall takes away (constraining vL as well would
+    // hide that loss and let particles push into walls step after step).
     bcs_.apply(grid_, box_, nodes_.v, true);
   }
 

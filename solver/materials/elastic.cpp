@@ -26,14 +26,27 @@ class LinearElastic final : public MaterialModel<Dim> {
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long k = 0; k < n; ++k) {
       const int p = ids[k];
-      const Mat3 L = embed<Dim>(ps.L[p]);
-      const Mat3 D = 0.5 * (L + L.transpose());  // rate of deformation
-      const Mat3 W = 0.5 * (L - L.transpose());  // spin
-      const Mat3 s = to_matrix(ps.sigma[p]);
-      // Jaumann rate: sigma_dot = C : D + W sigma - sigma W
-      const Mat3 rate = e_.lambda * D.trace() * Mat3::Identity() + 2.0 * e_.mu * D + W * s - s * W;
-      ps.sigma[p] = to_voigt(s + dt * rate);
-      if (!(ps.F[p].determinant() > 0.0) || !ps.sigma[p].allFinite()) bad = std::min(bad, static_cast<long>(p));
+      Sym& s = ps.sigma[p];
+      if constexpr (Dim == 2) {
+        // Plane strain written out: D in-plane, W = [[0, w], [-w, 0]], w = (L_xy - L_yx)/2.
+        const auto& L = ps.L[p];
+        const double dxx = L(0, 0), dyy = L(1, 1), dxy = 0.5 * (L(0, 1) + L(1, 0)), w = 0.5 * (L(0, 1) - L(1, 0));
+        const double lam_tr = e_.lambda * (dxx + dyy), two_mu = 2.0 * e_.mu;
+        const double sxx = s[0], syy = s[1], sxy = s[3];
+        s[0] += dt * (lam_tr + two_mu * dxx + 2.0 * w * sxy);
+        s[1] += dt * (lam_tr + two_mu * dyy - 2.0 * w * sxy);
+        s[2] += dt * lam_tr;
+        s[3] += dt * (two_mu * dxy + w * (syy - sxx));
+      } else {
+        const Mat3 L = embed<Dim>(ps.L[p]);
+        const Mat3 D = 0.5 * (L + L.transpose());  // rate of deformation
+        const Mat3 W = 0.5 * (L - L.transpose());  // spin
+        const Mat3 sm = to_matrix(s);
+        // Jaumann rate: sigma_dot = C : D + W sigma - sigma W
+        const Mat3 rate = e_.lambda * D.trace() * Mat3::Identity() + 2.0 * e_.mu * D + W * sm - sm * W;
+        s = to_voigt(sm + dt * rate);
+      }
+      if (!s.allFinite()) bad = std::min(bad, static_cast<long>(p));
     }
     return bad == kNoParticle ? -1 : bad;
   }

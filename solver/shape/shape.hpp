@@ -58,13 +58,43 @@ struct Gimp {
     const double l = l_p / ax.h;  // half-size in cells, <= 1/2
     const int c = std::clamp(static_cast<int>(std::floor(xi)), 0, ax.cells - 1);
     base = std::clamp(xi - c < 0.5 ? c - 1 : c, 0, ax.nodes - 3);
-    // Particle domain clipped to the grid [0, cells].
+    const double inv_h = 1.0 / ax.h;
+    if (l <= 0.0) {  // a point (e.g. a traction's face point): the hat functions themselves
+      for (int s = 0; s < 3; ++s) {
+        const double r = xi - (base + s);
+        w[s] = hat(r);
+        dw[s] = std::abs(r) < 1.0 ? (r < 0.0 ? inv_h : -inv_h) : 0.0;
+      }
+      return;
+    }
+    if (xi - l >= 0.0 && xi + l <= ax.cells) {
+      // Domain inside the grid: closed-form uGIMP (Bardenhagen & Kober 2004), r = (x - x_i)/h.
+      for (int s = 0; s < 3; ++s) {
+        const double r = xi - (base + s), ar = std::abs(r), sg = r < 0.0 ? -1.0 : 1.0;
+        if (ar <= l) {
+          w[s] = 1.0 - (r * r + l * l) / (2.0 * l);
+          dw[s] = -r / l * inv_h;
+        } else if (ar <= 1.0 - l) {
+          w[s] = 1.0 - ar;
+          dw[s] = -sg * inv_h;
+        } else if (ar < 1.0 + l) {
+          const double d = 1.0 + l - ar;
+          w[s] = d * d / (4.0 * l);
+          dw[s] = -sg * d / (2.0 * l) * inv_h;
+        } else {
+          w[s] = 0.0;
+          dw[s] = 0.0;
+        }
+      }
+      return;
+    }
+    // Particle domain clipped to the grid [0, cells]: average of the hat function over [a, b].
     const double a = std::max(xi - l, 0.0), b = std::min(xi + l, static_cast<double>(ax.cells));
     const double inv = 1.0 / (b - a);
     for (int s = 0; s < 3; ++s) {
       const double i = base + s;
       w[s] = (hat_integral(b - i) - hat_integral(a - i)) * inv;
-      dw[s] = (hat(b - i) - hat(a - i)) * inv / ax.h;
+      dw[s] = (hat(b - i) - hat(a - i)) * inv * inv_h;
     }
   }
 };

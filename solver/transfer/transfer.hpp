@@ -113,38 +113,32 @@ void scatter_mass_momentum_force(const Grid<Dim>& g, const StripeSchedule& sched
   });
 }
 
-/// MUSL remap: (mv)_i = sum_p N_ip m_p v_p with the updated particle velocities, then v_i.
+/// G2P and MUSL remap in one pass over the particles (Sulsky et al. 1995):
+///   v_p <- flip (v_p + sum_i N_ip (v_i - vL_i)) + (1 - flip) sum_i N_ip v_i      (FLIP/PIC blend)
+///   x_p <- x_p + dt sum_i N_ip v_i
+///   (mv)_i = sum_p N_ip m_p v_p,  v_i = (mv)_i / m_i                           (remap, then BCs)
+/// Fusing is valid because the gather reads v_i, vL_i and the scatter writes only (mv)_i; running
+/// it through the stripe schedule keeps the scatter race-free and its order fixed.
 template <int Dim, int S>
-void scatter_momentum(const Grid<Dim>& g, const StripeSchedule& schedule, const NodeBox<Dim>& box,
-                      const ParticleSet<Dim>& ps, const std::vector<shape::ShapeData<Dim, S>>& sd,
-                      NodeFields<Dim>& nf) {
+void gather_velocity_position_remap(const Grid<Dim>& g, const StripeSchedule& schedule, const NodeBox<Dim>& box,
+                                    const std::vector<shape::ShapeData<Dim, S>>& sd, double dt, double flip,
+                                    ParticleSet<Dim>& ps, NodeFields<Dim>& nf) {
   g.for_each_node(box, [&](std::size_t i, const auto&) { nf.mv[i].setZero(); });
   schedule.run([&](int p) {
-    const Vec<Dim> mv_p = ps.m[p] * ps.v[p];
-    shape::for_each_node(g, sd[p], [&](std::size_t i, double N, const Vec<Dim>&) { nf.mv[i] += N * mv_p; });
-  });
-  g.for_each_node(box, [&](std::size_t i, const auto&) {
-    nf.v[i] = nf.m[i] > empty_node_mass ? Vec<Dim>(nf.mv[i] / nf.m[i]) : Vec<Dim>::Zero();
-  });
-}
-
-/// G2P with a FLIP/PIC blend (flip = 1 pure FLIP, 0 pure PIC) and position update with the grid
-/// velocity:  v_p <- flip (v_p + sum N (v_i - vL_i)) + (1 - flip) sum N v_i,  x_p += dt sum N v_i.
-template <int Dim, int S>
-void gather_velocity_position(const Grid<Dim>& g, const NodeFields<Dim>& nf,
-                              const std::vector<shape::ShapeData<Dim, S>>& sd, double dt, double flip,
-                              ParticleSet<Dim>& ps) {
-  const long n = static_cast<long>(ps.size());
-#pragma omp parallel for schedule(static) if (n > parallel_threshold)
-  for (long p = 0; p < n; ++p) {
     Vec<Dim> v_new = Vec<Dim>::Zero(), dv = Vec<Dim>::Zero();
     shape::for_each_node(g, sd[p], [&](std::size_t i, double N, const Vec<Dim>&) {
       v_new += N * nf.v[i];
       dv += N * (nf.v[i] - nf.vL[i]);
     });
-    ps.v[p] = flip * (ps.v[p] + dv) + (1.0 - flip) * v_new;
+    const Vec<Dim> v_p = flip * (ps.v[p] + dv) + (1.0 - flip) * v_new;
+    ps.v[p] = v_p;
     ps.x[p] += dt * v_new;
-  }
+    const Vec<Dim> mv_p = ps.m[p] * v_p;
+    shape::for_each_node(g, sd[p], [&](std::size_t i, double N, const Vec<Dim>&) { nf.mv[i] += N * mv_p; });
+  });
+  g.for_each_node(box, [&](std::size_t i, const auto&) {
+    nf.v[i] = nf.m[i] > empty_node_mass ? Vec<Dim>(nf.mv[i] / nf.m[i]) : Vec<Dim>::Zero();
+  });
 }
 
 /// Velocity gradient L_p = sum_i v_i (x) grad N_ip, then F_{n+1} = (I + dt L) F_n and V = det F V0.

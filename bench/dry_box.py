@@ -1,0 +1,100 @@
+#!/usr/bin/env python3
+"""Dry-MPM speed benchmark (issue: core). Writes scenes for a 2D GIMP linear-elastic box of
+~10k, 100k and 1M particles and a 3D box, runs `swmpm preprocess` + `swmpm solve --threads N`, and
+tabulates microseconds per particle-step and memory per particle from each run.json.
+
+Usage: bench/dry_box.py [--swmpm build/app/swmpm] [--sizes 10k,100k,1M,3d] [--threads 1,2]
+                        [--steps 100] [--out bench/results/dry-box-<date>.md]
+Memory per particle = (peak RSS of the run - peak RSS of a 1-particle run) / particles.
+"""
+import argparse, datetime, json, os, platform, subprocess, sys, tempfile
+
+SIZES = {  # name: (dimension, cells per side along x/y(/z), extent)
+    "10k": (2, 50, 5.0),
+    "100k": (2, 158, 15.8),
+    "1M": (2, 500, 50.0),
+    "3d-100k": (3, 30, 3.0),
+}
+
+def scene(dim, n, extent, steps):
+    h = extent / n
+    lo = [0.0] * dim
+    hi_grid = [extent + 2 * h] * dim
+    hi_body = [extent] * dim
+    g = [0.0] * dim
+    g[1] = -9.81
+    faces = ["x_min", "x_max", "z_min", "z_max"][: 2 * (dim - 1)]
+    E, rho = 1.0e7, 2000.0
+    c = ((E / rho)) ** 0.5
+    dt = 0.4 * h / c
+    return {
+        "name": f"bench-{dim}d-{n}",
+        "dimension": dim,
+        "formulation": "dry",
+        "gravity": g,
+        "grid": {"cell_size": h, "min": lo, "max": hi_grid, "shape_function": "gimp"},
+        "materials": [{"name": "m", "model": "linear-elastic", "density": rho,
+                        "youngs_modulus": E, "poisson_ratio": 0.3}],
+        "bodies": [{"name": "box", "geometry": {"type": "box", "min": lo, "max": hi_body},
+                     "solid": "m", "particles_per_cell": 2}],
+        "boundaries": [{"on": f, "solid": "roller"} for f in faces] + [{"on": "y_min", "solid": "fixed"}],
+        "time": {"end": steps * dt * (1 - 1e-9), "dt": dt},
+        "output": {"interval": 0.0},
+    }
+
+def run(swmpm, sc, threads, work):
+    path = os.path.join(work, sc["name"] + ".json")
+    with open(path, "w") as f:
+        json.dump(sc, f)
+    rd = os.path.join(work, sc["name"])
+    subprocess.run([swmpm, "-q", "preprocess", path, "-o", rd], check=True)
+    subprocess.run([swmpm, "-q", "solve", rd, "--threads", str(threads)], check=True)
+    with open(os.path.join(rd, "run.json")) as f:
+        return json.load(f)
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--swmpm", default="build/app/swmpm")
+    ap.add_argument("--sizes", default="10k,100k,1M,3d-100k")
+    ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--steps", type=int, default=100)
+    ap.add_argument("--out", default="")
+    a = ap.parse_args()
+    work = tempfile.mkdtemp(prefix="swmpm-bench-")
+    base = run(a.swmpm, scene(2, 2, 0.2, 2), 1, work)["peak_memory_bytes"]
+    rows = []
+    for name in a.sizes.split(","):
+        dim, n, ext = SIZES[name]
+        for t in [int(x) for x in a.threads.split(",")]:
+            r = run(a.swmpm, scene(dim, n, ext, a.steps), t, work)
+            parts = r["particles"]["solid"]
+            mem = (r["peak_memory_bytes"] - base) / parts
+            rows.append((name, dim, parts, t, r["steps"], r["us_per_particle_step"], mem, r["stage_seconds"]))
+            print(f"{name:8s} {dim}D {parts:>8d} particles, {t} thread(s): {r['us_per_particle_step']:.4f} us/particle-step, "
+                  f"{mem:.0f} B/particle", flush=True)
+    cpu = "unknown"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip(); break
+    except OSError:
+        pass
+    lines = [f"# Dry MPM speed — {datetime.date.today()}", "",
+             f"Machine: {cpu}, {os.cpu_count()} cores, {platform.platform()}.",
+             f"Scene: GIMP, linear-elastic box under gravity, 2x2(x2) particles per cell, MUSL, {a.steps} steps.", "",
+             "| case | dim | particles | threads | steps | us per particle-step | bytes per particle |",
+             "|---|---|---|---|---|---|---|"]
+    for (name, dim, parts, t, steps, us, mem, _) in rows:
+        lines.append(f"| {name} | {dim} | {parts} | {t} | {steps} | {us:.4f} | {mem:.0f} |")
+    lines += ["", "Stage split (seconds) of each run:", ""]
+    for (name, dim, parts, t, steps, us, mem, st) in rows:
+        total = sum(st.values())
+        lines.append(f"- {name}, {t} thread(s): " + ", ".join(f"{k} {100*v/total:.1f}%" for k, v in st.items()))
+    text = "\n".join(lines) + "\n"
+    if a.out:
+        with open(a.out, "w") as f:
+            f.write(text)
+    print(text)
+
+if __name__ == "__main__":
+    main()
