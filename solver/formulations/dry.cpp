@@ -64,7 +64,7 @@ class Dry final : public Formulation<Dim> {
       shape::ShapeData<Dim, S> face;  // shape functions at the particle's face point
       const Vec<Dim> x_face = (ps.x[p] + offset).cwiseMax(grid_.min()).cwiseMin(grid_.max());
       shape::evaluate<Shape>(grid_, x_face, Vec<Dim>::Zero().eval(), face);
-      shape::for_each_node(grid_, face, [&](std::size_t i, double N, const Vec<Dim>&) { nodes_.f[i] += N * f_p; });
+      shape::for_each_node(grid_, face, [&](std::size_t i, double N, const Vec<Dim>&) { nodes_.acc[i].f += N * f_p; });
     });
     lap("p2g");
 
@@ -128,14 +128,15 @@ class Dry final : public Formulation<Dim> {
     // vL_i = (mv)_i / m_i;  f_i -= alpha |f_i| sign(vL_i) (local damping);  v_i = vL_i + dt f_i / m_i
     const double alpha = damping_;
     grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
-      const double m = nodes_.m[i];
+      const auto& nd = nodes_.acc[i];
+      const double m = nd.m;
       if (m <= transfer::empty_node_mass) {
         nodes_.vL[i].setZero();
         nodes_.v[i].setZero();
         return;
       }
-      const Vec<Dim> vL = nodes_.mv[i] / m;
-      Vec<Dim> f = nodes_.f[i];
+      const Vec<Dim> vL = nd.mv / m;
+      Vec<Dim> f = nd.f;
       if (alpha > 0.0)
         for (int a = 0; a < Dim; ++a) f[a] -= alpha * std::abs(f[a]) * (vL[a] > 0 ? 1.0 : (vL[a] < 0 ? -1.0 : 0.0));
       nodes_.vL[i] = vL;

@@ -85,9 +85,10 @@ void build_schedule(const Grid<Dim>& g, const std::vector<shape::ShapeData<Dim, 
 template <int Dim>
 void clear_nodes(const Grid<Dim>& g, const NodeBox<Dim>& box, NodeFields<Dim>& nf) {
   g.for_each_node(box, [&](std::size_t i, const auto&) {
-    nf.m[i] = 0.0;
-    nf.mv[i].setZero();
-    nf.f[i].setZero();
+    auto& a = nf.acc[i];
+    a.m = 0.0;
+    a.mv.setZero();
+    a.f.setZero();
   });
 }
 
@@ -100,15 +101,25 @@ void scatter_mass_momentum_force(const Grid<Dim>& g, const StripeSchedule& sched
                                  const std::vector<shape::ShapeData<Dim, S>>& sd, const Vec<Dim>& b,
                                  NodeFields<Dim>& nf) {
   schedule.run([&](int p) {
+    const auto& sp = sd[p];
     const double m_p = ps.m[p];
     const Vec<Dim> mv_p = m_p * ps.v[p];
     const Vec<Dim> mb_p = m_p * b;
     const Mat3 s = to_matrix(ps.sigma[p]);
     const MatD<Dim> Vs = ps.V[p] * s.template topLeftCorner<Dim, Dim>();
-    shape::for_each_node(g, sd[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
-      nf.m[i] += N * m_p;
-      nf.mv[i] += N * mv_p;
-      nf.f[i] += N * mb_p - Vs * dN;
+    // Per row: f_i = wx[a] (w_r m_p b - Vs[:, 1:] g_r) + dwx[a] (-w_r Vs[:, 0])   (= N m_p b - Vs grad N)
+    shape::for_each_row(g, sp, [&](std::size_t row, double w_r, const Vec<Dim - 1>& g_r) {
+      const double m_r = w_r * m_p;
+      const Vec<Dim> mv_r = w_r * mv_p;
+      const Vec<Dim> f_w = w_r * mb_p - Vs.template rightCols<Dim - 1>() * g_r;
+      const Vec<Dim> f_dw = -w_r * Vs.col(0);
+      for (int a = 0; a < S; ++a) {
+        auto& nd = nf.acc[row + a];
+        const double wx = sp.w[0][a], dwx = sp.dw[0][a];
+        nd.m += wx * m_r;
+        nd.mv += wx * mv_r;
+        nd.f += wx * f_w + dwx * f_dw;
+      }
     });
   });
 }
@@ -123,21 +134,31 @@ template <int Dim, int S>
 void gather_velocity_position_remap(const Grid<Dim>& g, const StripeSchedule& schedule, const NodeBox<Dim>& box,
                                     const std::vector<shape::ShapeData<Dim, S>>& sd, double dt, double flip,
                                     ParticleSet<Dim>& ps, NodeFields<Dim>& nf) {
-  g.for_each_node(box, [&](std::size_t i, const auto&) { nf.mv[i].setZero(); });
+  g.for_each_node(box, [&](std::size_t i, const auto&) { nf.acc[i].mv.setZero(); });
   schedule.run([&](int p) {
-    Vec<Dim> v_new = Vec<Dim>::Zero(), dv = Vec<Dim>::Zero();
-    shape::for_each_node(g, sd[p], [&](std::size_t i, double N, const Vec<Dim>&) {
-      v_new += N * nf.v[i];
-      dv += N * (nf.v[i] - nf.vL[i]);
+    const auto& sp = sd[p];
+    Vec<Dim> v_new = Vec<Dim>::Zero(), v_old = Vec<Dim>::Zero();
+    shape::for_each_row(g, sp, [&](std::size_t row, double w_r, const Vec<Dim - 1>&) {
+      Vec<Dim> sv = Vec<Dim>::Zero(), svL = Vec<Dim>::Zero();
+      for (int a = 0; a < S; ++a) {
+        sv += sp.w[0][a] * nf.v[row + a];
+        svL += sp.w[0][a] * nf.vL[row + a];
+      }
+      v_new += w_r * sv;
+      v_old += w_r * svL;
     });
-    const Vec<Dim> v_p = flip * (ps.v[p] + dv) + (1.0 - flip) * v_new;
+    const Vec<Dim> v_p = flip * (ps.v[p] + v_new - v_old) + (1.0 - flip) * v_new;
     ps.v[p] = v_p;
     ps.x[p] += dt * v_new;
     const Vec<Dim> mv_p = ps.m[p] * v_p;
-    shape::for_each_node(g, sd[p], [&](std::size_t i, double N, const Vec<Dim>&) { nf.mv[i] += N * mv_p; });
+    shape::for_each_row(g, sp, [&](std::size_t row, double w_r, const Vec<Dim - 1>&) {
+      const Vec<Dim> mv_r = w_r * mv_p;
+      for (int a = 0; a < S; ++a) nf.acc[row + a].mv += sp.w[0][a] * mv_r;
+    });
   });
   g.for_each_node(box, [&](std::size_t i, const auto&) {
-    nf.v[i] = nf.m[i] > empty_node_mass ? Vec<Dim>(nf.mv[i] / nf.m[i]) : Vec<Dim>::Zero();
+    const auto& a = nf.acc[i];
+    nf.v[i] = a.m > empty_node_mass ? Vec<Dim>(a.mv / a.m) : Vec<Dim>::Zero();
   });
 }
 
@@ -151,9 +172,17 @@ long gather_velocity_gradient(const Grid<Dim>& g, const NodeFields<Dim>& nf,
   long bad = no_particle;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
   for (long p = 0; p < n; ++p) {
+    // L = sum_i v_i grad N_i^T; per row: column 0 gets w_r sum_a dwx[a] v_i, the others g_r sum_a wx[a] v_i.
+    const auto& sp = sd[p];
     MatD<Dim> L = MatD<Dim>::Zero();
-    shape::for_each_node(g, sd[p], [&](std::size_t i, double, const Vec<Dim>& dN) {
-      L.noalias() += nf.v[i] * dN.transpose();
+    shape::for_each_row(g, sp, [&](std::size_t row, double w_r, const Vec<Dim - 1>& g_r) {
+      Vec<Dim> sdx = Vec<Dim>::Zero(), sw = Vec<Dim>::Zero();
+      for (int a = 0; a < S; ++a) {
+        sdx += sp.dw[0][a] * nf.v[row + a];
+        sw += sp.w[0][a] * nf.v[row + a];
+      }
+      L.col(0) += w_r * sdx;
+      L.template rightCols<Dim - 1>() += sw * g_r.transpose();
     });
     ps.L[p] = L;
     Mat3 dF = Mat3::Identity();
