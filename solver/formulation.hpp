@@ -42,6 +42,15 @@ struct State {
   double time = 0.0;
   long step = 0;
   Health health;
+  /// Current index of each particle id. Formulations may reorder particles for memory locality;
+  /// ids are stable, so monitors and loads refer to particles by id through this table.
+  std::vector<int> index_of_id;
+  void index_ids() {
+    std::int64_t max_id = -1;
+    for (auto i : solid.id) max_id = std::max(max_id, i);
+    index_of_id.assign(static_cast<std::size_t>(max_id + 1), -1);
+    for (std::size_t p = 0; p < solid.size(); ++p) index_of_id[solid.id[p]] = static_cast<int>(p);
+  }
 };
 
 /// Wall time spent in each named stage of step(), for the log and the benchmarks.

@@ -123,7 +123,7 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const ParticleSet<Dim>&
         for (int a = 0; a < Dim; ++a) force[a] = load.value[a] * area;
       Vec<Dim> offset = Vec<Dim>::Zero();
       offset[axis] = outward * ps.l[p][axis];
-      e.particles.push_back(static_cast<int>(p));
+      e.ids.push_back(ps.id[p]);
       e.force.push_back(force);
       e.offset.push_back(offset);
     }

@@ -56,22 +56,23 @@ class ParticleLoads {
   /// force acts on the body's surface, at x_p + offset (the particle domain's face point), so
   /// formulations evaluate the shape functions there rather than at the particle centre: a
   /// traction then loads the nodes of the surface, not those around the first particle row.
+  /// `index_of_id` maps particle ids to current indices (State::index_of_id).
   template <class Fn>
-  void for_each_force(double t, Fn&& fn) const {
+  void for_each_force(double t, const std::vector<int>& index_of_id, Fn&& fn) const {
     for (const auto& e : entries_) {
       const double scale = e.fn(t);
       if (scale == 0.0) continue;
-      for (std::size_t k = 0; k < e.particles.size(); ++k)
-        fn(e.particles[k], (scale * e.force[k]).eval(), e.offset[k]);
+      for (std::size_t k = 0; k < e.ids.size(); ++k)
+        fn(index_of_id[e.ids[k]], (scale * e.force[k]).eval(), e.offset[k]);
     }
   }
   std::size_t count() const { return entries_.size(); }
   /// Number of particles a load acts on (to report and test the tagging).
-  std::size_t particles(std::size_t load) const { return entries_[load].particles.size(); }
+  std::size_t particles(std::size_t load) const { return entries_[load].ids.size(); }
 
  private:
   struct Entry {
-    std::vector<int> particles;
+    std::vector<std::int64_t> ids;  // particle ids (stable under reordering)
     std::vector<Vec<Dim>> force;   // N (N/m in 2D) at f(t) = 1
     std::vector<Vec<Dim>> offset;  // m, from the particle centre to its face point
     TimeFunction fn;

@@ -69,6 +69,7 @@ class Runner {
     scene_ = scene::load_scene((dir_ / "scene.json").string());
     const fs::path particles = dir_ / "particles" / "solid.vtu";
     state_.solid = particles_from_cloud<Dim>(scene::read_vtu(particles.string()), particles.string());
+    state_.index_ids();
     auto formulation = make_formulation<Dim>(scene_, state_);
     threads_ = omp_get_max_threads();
 
@@ -103,9 +104,9 @@ class Runner {
     const double eps_t = 1e-12 * end;
     double next_frame = 0.0, next_monitor = 0.0, work = 0.0;
     double dt_min = std::numeric_limits<double>::max(), dt_max = 0.0, dt = 0.0;
-    ParticleSet<Dim> last_good = state_.solid;
+    ParticleSet<Dim> last_good;
+    last_good.copy_state_from(state_.solid);
     double last_good_time = 0.0;
-    long last_good_step = 0;
     std::string status = "completed", diagnosis;
     const bool tty = !opt_.quiet && isatty(fileno(stderr));
     auto last_progress = std::chrono::steady_clock::now();
@@ -146,9 +147,8 @@ class Runner {
       dt_max = std::max(dt_max, dt);
 
       if (state_.step % scene_.solver.checkpoint_every == 0) {
-        last_good = state_.solid;  // vectors keep their capacity: no allocation after the first copy
+        last_good.copy_state_from(state_.solid);  // reuses capacity: no allocation after the first copy
         last_good_time = state_.time;
-        last_good_step = state_.step;
       }
       if (state_.time >= next_monitor - eps_t) {
         monitors.record(state_, *formulation, work);
@@ -180,12 +180,17 @@ class Runner {
 
     if (status == "diverged") {
       log_.line("DIVERGED: " + diagnosis);
-      state_.solid = last_good;
-      state_.time = last_good_time;
-      state_.step = last_good_step;
-      write_frame(last_good_time);
-      log_.line("wrote the last good state (t = " + fmt(last_good_time) + " s, step " +
-                std::to_string(last_good_step) + ") as the final frame");
+      // Every frame written so far passed the checks; the snapshot is newer only if it was taken
+      // after the last frame. Either way the series ends with the last good state, in time order.
+      if (frames_.empty() || last_good_time > frames_.back().time) {
+        ParticleSet<Dim> failed = std::move(state_.solid);
+        state_.solid = std::move(last_good);
+        write_frame(last_good_time);
+        state_.solid = std::move(failed);
+      }
+      last_good_frame_time_ = frames_.back().time;
+      log_.line("the last frame (t = " + fmt(last_good_frame_time_) + " s) is the last good state; the run failed in step " +
+                std::to_string(state_.step + 1));
     } else if (status == "interrupted") {
       write_frame(state_.time);
       log_.line("interrupted at t = " + fmt(state_.time) + " s; wrote the current state as the final frame");
@@ -218,6 +223,7 @@ class Runner {
     rj["peak_memory_bytes"] = peak_memory_bytes();
     rj["particle_bytes"] = state_.solid.size() * ParticleSet<Dim>::bytes_per_particle();
     rj["frames"] = frames_.size();
+    if (status == "diverged") rj["last_good_frame_time"] = last_good_frame_time_;
     nlohmann::ordered_json stages;
     const auto& st = formulation->stage_times();
     for (std::size_t k = 0; k < st.names.size(); ++k) stages[st.names[k]] = st.seconds[k];
@@ -249,12 +255,15 @@ class Runner {
   std::string describe_failure(const ParticleSet<Dim>& before, const StepContext& ctx) const {
     const auto& h = state_.health;
     const long p = h.particle;
+    // The snapshot may hold the particles in another order: find this one by id.
+    long q = 0;
+    while (q < static_cast<long>(before.size()) && before.id[q] != state_.solid.id[p]) ++q;
     std::ostringstream os;
     os << h.phase << " particle " << state_.solid.id[p] << " (body \"" << scene_.bodies[state_.solid.body[p]].name
        << "\") " << h.what << " in the step from t = " << ctx.t << " s (step " << state_.step + 1 << ", dt = " << ctx.dt
        << " s); it was at (";
-    for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << before.x[p][a];
-    os << ") with speed " << before.v[p].norm() << " m/s at the last good state; now at (";
+    for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << before.x[q][a];
+    os << ") with speed " << before.v[q].norm() << " m/s at the last good state; now at (";
     for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << state_.solid.x[p][a];
     os << "). Try a smaller dt (or cfl), a finer output interval to see the onset, or check the loads.";
     return os.str();
@@ -276,6 +285,7 @@ class Runner {
   State<Dim> state_;
   int threads_ = 1;
   std::vector<scene::PvdEntry> frames_;
+  double last_good_frame_time_ = 0.0;
 };
 
 }  // namespace

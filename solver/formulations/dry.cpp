@@ -52,15 +52,24 @@ class Dry final : public Formulation<Dim> {
       t0 = t1;
     };
 
+    // (0) every reorder_interval steps, store the particles in last step's schedule order, so the
+    //     transfers below walk particle memory sequentially (results stay thread-independent).
+    if (st.step % reorder_interval == 0 && schedule_.order().size() == ps.size() && !schedule_.in_order()) {
+      reorder_.apply(ps, schedule_.order());
+      st.index_ids();
+      regroup_by_material(ps, material_particles_);
+      lap("reorder");
+    }
     long bad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);                       // (1)
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
-    transfer::build_schedule(grid_, sd_, schedule_);
-    transfer::clear_nodes(grid_, box_, nodes_);
     lap("shape functions");
+    transfer::build_schedule(grid_, sd_, schedule_);
+    lap("schedule");
+    transfer::clear_nodes(grid_, box_, nodes_);
 
     transfer::scatter_mass_momentum_force(grid_, schedule_, ps, sd_, b, nodes_);       // (2)
-    loads_.for_each_force(ctx.t, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>& offset) {  // (3)
+    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>& offset) {  // (3)
       shape::ShapeData<Dim, S> face;  // shape functions at the particle's face point
       const Vec<Dim> x_face = (ps.x[p] + offset).cwiseMax(grid_.min()).cwiseMin(grid_.max());
       shape::evaluate<Shape>(grid_, x_face, Vec<Dim>::Zero().eval(), face);
@@ -118,7 +127,7 @@ class Dry final : public Formulation<Dim> {
     Vec<Dim> b;
     for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
     double power = fixed_order_sum(ps.size(), [&](std::size_t p) { return ps.m[p] * b.dot(ps.v[p]); });
-    loads_.for_each_force(ctx.t, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&) { power += f_p.dot(ps.v[p]); });
+    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&) { power += f_p.dot(ps.v[p]); });
     return power;
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
@@ -158,6 +167,8 @@ class Dry final : public Formulation<Dim> {
   NodeBox<Dim> box_;
   std::vector<shape::ShapeData<Dim, S>> sd_;
   StripeSchedule schedule_;
+  Reorder<Dim> reorder_;
+  static constexpr long reorder_interval = 10;  // steps
 };
 
 }  // namespace

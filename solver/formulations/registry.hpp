@@ -36,10 +36,16 @@ std::vector<std::unique_ptr<MaterialModel<Dim>>> make_materials(const scene::Sce
   return out;
 }
 
+/// Particle indices of each material, in increasing index; regroup reuses the vectors' capacity.
+template <int Dim>
+void regroup_by_material(const ParticleSet<Dim>& ps, std::vector<std::vector<int>>& groups) {
+  for (auto& g : groups) g.clear();
+  for (std::size_t p = 0; p < ps.size(); ++p) groups.at(ps.material[p]).push_back(static_cast<int>(p));
+}
 template <int Dim>
 std::vector<std::vector<int>> group_by_material(const ParticleSet<Dim>& ps, std::size_t materials) {
   std::vector<std::vector<int>> groups(materials);
-  for (std::size_t p = 0; p < ps.size(); ++p) groups.at(ps.material[p]).push_back(static_cast<int>(p));
+  regroup_by_material(ps, groups);
   return groups;
 }
 

@@ -37,23 +37,25 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
       if (particle < 0)
         throw std::runtime_error(where + "/particle: no solid particle has id " + std::to_string(*mon.particle));
     }
-    monitor_particle_.push_back(particle);
+    // Columns refer to the particle by id: formulations may reorder particles (State::index_of_id).
+    const std::int64_t pid = particle < 0 ? -1 : ps.id[particle];
+    monitor_particle_.push_back(pid);
     names_.push_back(mon.name);
     for (const auto& qn : mon.quantities) {
-      Column c{particle, Q::disp, 0};
+      Column c{pid, Q::disp, 0};
       const auto xyz = std::string("xyz").find(qn.back());
       const int comp = xyz == std::string::npos || static_cast<int>(xyz) >= Dim ? -1 : static_cast<int>(xyz);
-      if (qn.rfind("displacement_", 0) == 0) c = {particle, Q::disp, comp};
-      else if (qn.rfind("velocity_", 0) == 0) c = {particle, Q::vel, comp};
+      if (qn.rfind("displacement_", 0) == 0) c = {pid, Q::disp, comp};
+      else if (qn.rfind("velocity_", 0) == 0) c = {pid, Q::vel, comp};
       else if (qn.rfind("stress_", 0) == 0) {
         static const char* names[] = {"xx", "yy", "zz", "xy", "yz", "xz"};
         int idx = -1;
         for (int i = 0; i < 6; ++i)
           if (qn.substr(7) == names[i]) idx = i;
-        c = {particle, Q::stress, idx};
-      } else if (qn == "mean_effective_stress") c = {particle, Q::p_mean, 0};
-      else if (qn == "deviatoric_stress") c = {particle, Q::q_dev, 0};
-      else if (qn == "plastic_strain") c = {particle, Q::eps_p, 0};
+        c = {pid, Q::stress, idx};
+      } else if (qn == "mean_effective_stress") c = {pid, Q::p_mean, 0};
+      else if (qn == "deviatoric_stress") c = {pid, Q::q_dev, 0};
+      else if (qn == "plastic_strain") c = {pid, Q::eps_p, 0};
       else if (qn == "kinetic_energy") c = {-1, Q::kinetic, 0};
       else if (qn == "strain_energy") c = {-1, Q::strain, 0};
       else if (qn == "total_energy") c = {-1, Q::total, 0};
@@ -80,7 +82,7 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
   double ke = -1.0, se = -1.0;
   for (const Column& c : columns_) {
     double val = 0.0;
-    const int p = c.particle;
+    const int p = c.particle < 0 ? -1 : st.index_of_id[c.particle];
     switch (c.q) {
       case Q::disp: val = ps.x[p][c.comp] - ps.x0[p][c.comp]; break;
       case Q::vel: val = ps.v[p][c.comp]; break;
@@ -107,7 +109,7 @@ template <int Dim>
 std::vector<std::string> Monitors<Dim>::describe(const State<Dim>& st) const {
   std::vector<std::string> lines;
   for (std::size_t k = 0; k < names_.size(); ++k) {
-    const int p = monitor_particle_[k];
+    const int p = monitor_particle_[k] < 0 ? -1 : st.index_of_id[monitor_particle_[k]];
     std::ostringstream os;
     os << "monitor " << names_[k] << ": ";
     if (p < 0) os << "whole system";

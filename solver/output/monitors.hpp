@@ -3,6 +3,7 @@
 // A global monitor (no `at`, no `particle`) records energies of the whole system.
 #pragma once
 
+#include <cstdint>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -25,12 +26,12 @@ class Monitors {
  private:
   enum class Q { disp, vel, stress, p_mean, q_dev, eps_p, kinetic, strain, total, work };
   struct Column {
-    int particle;  // -1 for global
+    std::int64_t particle;  // particle id, -1 for global
     Q q;
     int comp;
   };
   std::vector<std::string> names_;
-  std::vector<int> monitor_particle_;
+  std::vector<std::int64_t> monitor_particle_;  // ids, -1 for global
   std::vector<Column> columns_;
   bool needs_work_ = false;
   std::ofstream out_;

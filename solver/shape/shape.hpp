@@ -69,22 +69,22 @@ struct Gimp {
     }
     if (xi - l >= 0.0 && xi + l <= ax.cells) {
       // Domain inside the grid: closed-form uGIMP (Bardenhagen & Kober 2004), r = (x - x_i)/h.
-      for (int s = 0; s < 3; ++s) {
+      // `base` makes node 1 the nearest (|r_1| < 1/2), so each node has only two cases, picked
+      // without branches: near node |r| <= l: 1 - (r^2 + l^2)/2l, else 1 - |r|;
+      // outer nodes |r| <= 1 - l: 1 - |r|, else (1 + l - |r|)^2 / 4l (0 beyond 1 + l).
+      const double inv_2l = 0.5 / l;
+      {
+        const double r = xi - (base + 1), ar = std::abs(r), sg = r < 0.0 ? -1.0 : 1.0;
+        const bool inner = ar <= l;
+        w[1] = inner ? 1.0 - (r * r + l * l) * inv_2l : 1.0 - ar;
+        dw[1] = (inner ? -r * 2.0 * inv_2l : -sg) * inv_h;
+      }
+      for (int s = 0; s < 3; s += 2) {
         const double r = xi - (base + s), ar = std::abs(r), sg = r < 0.0 ? -1.0 : 1.0;
-        if (ar <= l) {
-          w[s] = 1.0 - (r * r + l * l) / (2.0 * l);
-          dw[s] = -r / l * inv_h;
-        } else if (ar <= 1.0 - l) {
-          w[s] = 1.0 - ar;
-          dw[s] = -sg * inv_h;
-        } else if (ar < 1.0 + l) {
-          const double d = 1.0 + l - ar;
-          w[s] = d * d / (4.0 * l);
-          dw[s] = -sg * d / (2.0 * l) * inv_h;
-        } else {
-          w[s] = 0.0;
-          dw[s] = 0.0;
-        }
+        const double d = std::max(0.0, 1.0 + l - ar);
+        const bool linear = ar <= 1.0 - l;
+        w[s] = linear ? 1.0 - ar : d * d * 0.5 * inv_2l;
+        dw[s] = -sg * (linear ? 1.0 : d * inv_2l) * inv_h;
       }
       return;
     }

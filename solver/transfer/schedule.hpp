@@ -34,6 +34,15 @@ class StripeSchedule {
     for (std::size_t p = 0; p < n; ++p) order_[fill_[key_[p]]++] = static_cast<int>(p);
   }
 
+  /// Particle indices in schedule order (stripe by stripe, increasing index inside a stripe).
+  const std::vector<int>& order() const { return order_; }
+  /// Whether the particles are already stored in schedule order.
+  bool in_order() const {
+    for (std::size_t k = 0; k < order_.size(); ++k)
+      if (order_[k] != static_cast<int>(k)) return false;
+    return true;
+  }
+
   /// Calls fn(p) for every particle: two colours, stripes of one colour in parallel.
   template <class Fn>
   void run(Fn&& fn) const {

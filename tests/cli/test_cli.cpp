@@ -144,7 +144,7 @@ TEST(Divergence, StopsWithDiagnosisAndKeepsLastGoodState) {
   // The column with dt 20x its CFL limit (~9e-4 s): it blows up within a few dozen steps.
   json s = good_scene();
   s["time"]["dt"] = 2.0e-2;
-  s["solver"]["checkpoint_every"] = 1;
+  s["output"]["interval"] = 0.1;  // frames at t = 0 and every 5 steps; snapshots every 50 (default)
   const fs::path dir = swmpm::testing::scratch("diverge");
   std::ofstream(dir / "scene.json") << s.dump(2);
   const fs::path run = dir / "run";
@@ -156,7 +156,11 @@ TEST(Divergence, StopsWithDiagnosisAndKeepsLastGoodState) {
   EXPECT_NE(why.find("particle"), std::string::npos) << why;
   EXPECT_NE(why.find("t = "), std::string::npos) << why;
   EXPECT_NE(swmpm::testing::read_text((run / "log.txt").string()).find("DIVERGED"), std::string::npos);
-  // The last frame is the last good state: all finite, inside the grid.
+  // The series stays in time order and its last frame is the last good state: finite, in the grid.
+  const auto entries = swmpm::scene::read_pvd((run / "output" / "results.pvd").string());
+  for (std::size_t k = 1; k < entries.size(); ++k) EXPECT_GT(entries[k].time, entries[k - 1].time);
+  EXPECT_EQ(rj["last_good_frame_time"].get<double>(), entries.back().time);
+  EXPECT_GT(rj["steps"].get<long>(), 0);
   const auto frame = swmpm::testing::last_frame(run.string());
   ASSERT_GT(frame.size(), 0u);
   for (const auto& x : frame.points) {
