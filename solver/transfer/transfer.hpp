@@ -185,10 +185,17 @@ long gather_velocity_gradient(const Grid<Dim>& g, const NodeFields<Dim>& nf,
       L.template rightCols<Dim - 1>() += sw * g_r.transpose();
     });
     ps.L[p] = L;
-    Mat3 dF = Mat3::Identity();
-    dF.template topLeftCorner<Dim, Dim>() += dt * L;
-    ps.F[p] = dF * ps.F[p];
-    const double J = ps.F[p].determinant();
+    Mat3& F = ps.F[p];
+    double J;
+    if constexpr (Dim == 2) {
+      // Plane strain: F = [[F2, 0], [0, 1]] stays block diagonal, so only the 2x2 block moves.
+      const MatD<2> F2 = (MatD<2>::Identity() + dt * L) * F.template topLeftCorner<2, 2>();
+      F.template topLeftCorner<2, 2>() = F2;
+      J = F2.determinant() * F(2, 2);
+    } else {
+      F = (Mat3::Identity() + dt * L) * F;
+      J = F.determinant();
+    }
     ps.V[p] = J * ps.V0[p];
     if (!(J > 0.0) || !L.allFinite()) bad = std::min(bad, p);
   }
