@@ -2,7 +2,7 @@
 //
 // This is what crosses stage boundaries: preprocess writes particles/<phase>.vtu, the solver
 // reads them and writes output/<phase>_NNNNNN.vtu frames, postprocess reads frames back.
-// Well-known array names are in docs/scene-format.md ("Particle files").
+// Well-known array names are in docs/scene-format.md ("Particle files and frames").
 #pragma once
 
 #include <array>

@@ -67,8 +67,9 @@ template <int Dim>
 class Grid {
  public:
   Grid() = default;
-  /// Uniform grid on [min, max] with cell size h; `degree_extra` nodes per axis beyond cells
-  /// (1 for linear/GIMP, p for B-splines of degree p); `greville` selects B-spline node positions.
+  /// Uniform grid on [min, max] (max rounded up to whole cells) with cell size h. Linear/GIMP
+  /// (bspline = false): cells + 1 nodes per axis at the cell corners. B-splines of degree p
+  /// (bspline = true, degree = p): cells + p nodes per axis at the Greville abscissae.
   Grid(const Vec<Dim>& min, const Vec<Dim>& max, double h, int degree, bool bspline);
 
   const Axis& axis(int a) const { return axis_[a]; }

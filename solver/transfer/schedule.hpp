@@ -8,6 +8,8 @@
 // bitwise identical for any --threads (tests/verification/test_threads.cpp).
 #pragma once
 
+#include <omp.h>
+
 #include <algorithm>
 #include <vector>
 
@@ -17,21 +19,45 @@ namespace swmpm {
 
 class StripeSchedule {
  public:
-  /// base_of(p) returns particle p's first node index along the stripe axis.
+  /// base_of(p) returns particle p's first node index along the stripe axis. A stable counting
+  /// sort by stripe, done in parallel over contiguous chunks of particles (per-chunk histograms,
+  /// then each chunk scatters its particles after those of earlier chunks): the result is the one
+  /// stable order, whatever the number of threads.
   template <class BaseOf>
   void build(std::size_t n, int nodes_on_axis, int width, BaseOf&& base_of) {
     width_ = width;
     stripes_ = (nodes_on_axis + width - 1) / width;
-    start_.assign(stripes_ + 1, 0);
     key_.resize(n);
-    for (std::size_t p = 0; p < n; ++p) {
-      key_[p] = base_of(p) / width;
-      ++start_[key_[p] + 1];
-    }
-    for (int s = 0; s < stripes_; ++s) start_[s + 1] += start_[s];
     order_.resize(n);
-    fill_ = start_;
-    for (std::size_t p = 0; p < n; ++p) order_[fill_[key_[p]]++] = static_cast<int>(p);
+    start_.assign(stripes_ + 1, 0);
+    const long N = static_cast<long>(n);
+#pragma omp parallel if (N > parallel_threshold)
+    {
+      const int T = omp_get_num_threads(), t = omp_get_thread_num();
+#pragma omp single
+      counts_.assign(static_cast<std::size_t>(T) * stripes_, 0);
+      const long lo = N * t / T, hi = N * (t + 1) / T;
+      int* count = counts_.data() + static_cast<std::size_t>(t) * stripes_;
+      for (long p = lo; p < hi; ++p) {
+        key_[p] = base_of(static_cast<std::size_t>(p)) / width;
+        ++count[key_[p]];
+      }
+#pragma omp barrier
+#pragma omp single
+      {
+        // Stripe starts, then each chunk's first slot in each stripe.
+        for (int s = 0; s < stripes_; ++s) {
+          int sum = start_[s];
+          for (int c = 0; c < T; ++c) {
+            const int k = counts_[static_cast<std::size_t>(c) * stripes_ + s];
+            counts_[static_cast<std::size_t>(c) * stripes_ + s] = sum;
+            sum += k;
+          }
+          start_[s + 1] = sum;
+        }
+      }
+      for (long p = lo; p < hi; ++p) order_[count[key_[p]]++] = static_cast<int>(p);
+    }
   }
 
   /// Particle indices in schedule order (stripe by stripe, increasing index inside a stripe).
@@ -55,7 +81,8 @@ class StripeSchedule {
 
  private:
   int width_ = 1, stripes_ = 0;
-  std::vector<int> start_, fill_, key_, order_;
+  std::vector<int> start_, key_, order_;
+  std::vector<int> counts_;  // per chunk and stripe: counts, then first slots
 };
 
 }  // namespace swmpm

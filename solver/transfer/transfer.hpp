@@ -1,6 +1,7 @@
 // Particle <-> grid transfers shared by every formulation (the "vocabulary" of the MPM step).
-// Scatters go through StripeSchedule (race-free, thread-count independent); gathers are plain
-// parallel loops over particles. Nothing here allocates per particle.
+// Scatters (and the G2P fused with the MUSL scatter) go through StripeSchedule (race-free,
+// thread-count independent); pure gathers are parallel loops over particles. Kernels use the
+// row-factored visitor shape::for_each_row. Nothing here allocates per particle.
 #pragma once
 
 #include <algorithm>

@@ -100,6 +100,16 @@ TEST(BadInput, UnknownEnumValue) {
   expect_rejected(s, "enum", "/grid/shape_function", "bspline3");
 }
 
+TEST(BadInput, SwitchesTheFormulationDoesNotUseAreRejected) {
+  json s = good_scene();
+  s["solver"]["stabilisation"] = {{"pressure", "mfvp-linear"}};
+  expect_rejected(s, "unused-switch", "/solver/stabilisation", "dry");
+  s = good_scene();
+  s["materials"][0]["model"] = "hencky";
+  s["bodies"][0]["initial"] = {{"stress", {-1e3, -1e3, -1e3, 0, 0, 0}}};
+  expect_rejected(s, "hencky-stress", "/bodies/0/initial/stress", "hencky");
+}
+
 TEST(BadInput, SeveralProblemsAreAllListed) {
   json s = good_scene();
   s["grid"]["cell_size"] = -1.0;

@@ -26,14 +26,22 @@ double rms(const std::vector<double>& e) {
 
 }  // namespace
 
-TEST(Loads, TopTraction) {
+namespace {
+
+/// Tolerance on the RMS stress error: GIMP and quadratic B-splines 1 %. Linear: once the loaded
+/// surface has settled inside the top cell, the traction (applied at the surface point) is shared
+/// by the cell's two node rows and the top cell's particles carry ~85 % of q — a local artifact of
+/// cell-wise constant strain (interior and settlement stay within 1 %); 4 %. Cubic B-splines at
+/// 2x2 particles per cell under-integrate the wide basis and show 4-5 % stress noise; 6 %.
+void top_traction(const std::string& shape, double tolerance) {
   constexpr double q = 1.0e4, E = 1.0e6, nu = 0.3, H = 1.0;
   json s = column();
+  s["grid"]["shape_function"] = shape;
   s["gravity"] = {0.0, 0.0};
   s.erase("gravity_ramp");
   s["loads"] = json::array({{{"type", "traction"}, {"body", "column"}, {"face", "y_max"},
                              {"value", {0.0, -q}}, {"ramp", 0.3}}});
-  const std::string run = swmpm::testing::run_scene(s, "traction");
+  const std::string run = swmpm::testing::run_scene(s, "traction-" + shape);
   const auto f = swmpm::testing::last_frame(run);
   const auto& st = f.get("stress", "frame").values;
   const auto& d = f.get("displacement", "frame").values;
@@ -46,10 +54,19 @@ TEST(Loads, TopTraction) {
   const double M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu));
   const double y_top = H - 0.0125;  // the top particles' height
   const double u_exact = q * y_top / M;
-  std::printf("traction: sigma_yy RMS error %.4f %% of q, settlement %.5f m (exact %.5f), error %.3f %%\n",
-              100 * rms(err), -u_top, u_exact, 100 * std::abs(-u_top - u_exact) / u_exact);
-  EXPECT_LT(rms(err), 0.01);
-  EXPECT_NEAR(-u_top / u_exact, 1.0, 0.02);
+  std::printf("traction (%s): sigma_yy RMS error %.4f %% of q, settlement %.5f m (exact %.5f), error %.3f %%\n",
+              shape.c_str(), 100 * rms(err), -u_top, u_exact, 100 * std::abs(-u_top - u_exact) / u_exact);
+  EXPECT_LT(rms(err), tolerance) << shape;
+  EXPECT_NEAR(-u_top / u_exact, 1.0, 0.02) << shape;
+}
+
+}  // namespace
+
+TEST(Loads, TopTraction) {
+  top_traction("gimp", 0.01);
+  top_traction("bspline2", 0.01);
+  top_traction("linear", 0.04);
+  top_traction("bspline3", 0.06);
 }
 
 TEST(Materials, HenckyColumn) {
