@@ -180,3 +180,22 @@ TEST(Divergence, StopsWithDiagnosisAndKeepsLastGoodState) {
   }
   for (double v : frame.get("stress", "frame").values) ASSERT_TRUE(std::isfinite(v));
 }
+
+TEST(Divergence, ParticleLeavingTheGridIsDiagnosed) {
+  // A block thrown upward at 20 m/s towards the free top of a grid that ends 0.3 m above it.
+  json s = good_scene();
+  s["grid"]["max"] = {0.1, 1.3};
+  s["bodies"][0]["initial"] = {{"velocity", {"0", "20"}}};
+  s["gravity"] = {0.0, 0.0};
+  s.erase("gravity_ramp");
+  s["boundaries"] = json::array({{{"on", "x_min"}, {"solid", "roller"}}, {{"on", "x_max"}, {"solid", "roller"}}});
+  s["output"]["monitors"] = json::array();
+  const fs::path dir = swmpm::testing::scratch("leave");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const fs::path run = dir / "run";
+  const Result r = swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + run.string(), dir);
+  EXPECT_EQ(r.status, 3) << r.out << r.err;
+  const json rj = swmpm::testing::load_json((run / "run.json").string());
+  EXPECT_EQ(rj["status"], "diverged");
+  EXPECT_NE(rj["diagnosis"].get<std::string>().find("left the grid"), std::string::npos) << rj["diagnosis"];
+}
