@@ -66,6 +66,19 @@ GridBoundary<Dim>::GridBoundary(const scene::Scene& s) {
 }
 
 template <int Dim>
+GridBoundary<Dim> GridBoundary<Dim>::fluid(const scene::Scene& s) {
+  std::vector<Face> faces;
+  for (const auto& b : s.boundaries) {
+    const int f = face_index(b.on);
+    const bool impermeable = b.fluid ? *b.fluid == scene::FluidBc::impermeable : b.solid != scene::SolidBc::free;
+    if (b.fluid && *b.fluid == scene::FluidBc::pressure)
+      throw std::runtime_error("boundaries: fluid \"pressure\" on " + b.on + " is not implemented yet in this version");
+    if (impermeable) faces.push_back({f / 2, f % 2, scene::SolidBc::roller, 0.0});
+  }
+  return GridBoundary(std::move(faces));
+}
+
+template <int Dim>
 void GridBoundary<Dim>::apply(const Grid<Dim>& g, const NodeBox<Dim>& box, std::vector<Vec<Dim>>& v,
                               bool with_friction) const {
   for (const Face& face : faces_) {

@@ -36,6 +36,12 @@ class GridBoundary {
     double mu;  // Coulomb coefficient (friction)
   };
   GridBoundary(const scene::Scene& s);
+  explicit GridBoundary(std::vector<Face> faces) : faces_(std::move(faces)) {}
+  /// Conditions on the pore-fluid velocity: an `impermeable` face stops the fluid's normal
+  /// velocity (a roller for the fluid); `drained` leaves it free (p = 0 is the natural condition).
+  /// A face without a `fluid` entry is impermeable where its solid condition is fixed, roller or
+  /// friction, drained where it is free; grid faces not listed at all are drained.
+  static GridBoundary fluid(const scene::Scene& s);
   /// Enforces the conditions on v for nodes of `box` that lie on a constrained face. Friction acts
   /// only when `with_friction` (on the end-of-step velocity; the start-of-step velocity only gets
   /// the kinematic constraints).

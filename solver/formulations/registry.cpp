@@ -16,9 +16,10 @@ template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_formulation(const scene::Scene& s, const State<Dim>& state) {
   switch (s.formulation) {
     case scene::Formulation::dry: return make_dry<Dim>(s, state);
+    case scene::Formulation::explicit_single_point: return make_explicit_single_point<Dim>(s, state);
     default:
       throw std::runtime_error("formulation \"" + scene::to_string(s.formulation) +
-                               "\" is not implemented yet in this version (available: dry)");
+                               "\" is not implemented yet in this version (available: dry, explicit-single-point)");
   }
 }
 

@@ -101,5 +101,7 @@ auto dispatch_shape(scene::ShapeFunction f, Fn&& fn) {
 
 template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_dry(const scene::Scene& s, const State<Dim>& state);
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_explicit_single_point(const scene::Scene& s, const State<Dim>& state);
 
 }  // namespace swmpm

@@ -19,8 +19,11 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
     const auto& mon = s.output.monitors[k];
     const std::string where = "/output/monitors/" + std::to_string(k);
     int particle = -1;
-    if (mon.phase != "solid")
-      throw std::runtime_error(where + "/phase: \"" + mon.phase + "\" is not available in this formulation");
+    // Single-point two-phase sets carry both phases on one point: phase "fluid" reads its fluid
+    // fields (velocity, pore pressure); double-point sets are not implemented yet.
+    const bool fluid_phase = mon.phase == "fluid";
+    if (fluid_phase && !ps.two_phase())
+      throw std::runtime_error(where + "/phase: \"fluid\" is not available in this formulation");
     if (mon.at) {
       double best = std::numeric_limits<double>::max();
       for (std::size_t p = 0; p < ps.size(); ++p) {
@@ -46,7 +49,9 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
       const auto xyz = std::string("xyz").find(qn.back());
       const int comp = xyz == std::string::npos || static_cast<int>(xyz) >= Dim ? -1 : static_cast<int>(xyz);
       if (qn.rfind("displacement_", 0) == 0) c = {pid, Q::disp, comp};
-      else if (qn.rfind("velocity_", 0) == 0) c = {pid, Q::vel, comp};
+      else if (qn.rfind("velocity_", 0) == 0) c = {pid, fluid_phase ? Q::vel_fluid : Q::vel, comp};
+      else if (qn == "pore_pressure" && ps.two_phase()) c = {pid, Q::pore, 0};
+      else if (qn == "porosity" && ps.two_phase()) c = {pid, Q::porosity, 0};
       else if (qn.rfind("stress_", 0) == 0) {
         static const char* names[] = {"xx", "yy", "zz", "xy", "yz", "xz"};
         int idx = -1;
@@ -65,7 +70,7 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
       } else
         throw std::runtime_error(where + "/quantities: \"" + qn + "\" is not available in this formulation");
       if (c.comp < 0) throw std::runtime_error(where + "/quantities: unknown component in \"" + qn + "\"");
-      if (c.particle < 0 && c.q != Q::kinetic && c.q != Q::strain && c.q != Q::total && c.q != Q::work)
+      if (c.particle < 0 && c.q < Q::kinetic)
         throw std::runtime_error(where + ": \"" + qn + "\" needs \"at\" or \"particle\"");
       columns_.push_back(c);
       header << "," << mon.name << "." << qn;
@@ -86,6 +91,9 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
     switch (c.q) {
       case Q::disp: val = ps.x[p][c.comp] - ps.x0[p][c.comp]; break;
       case Q::vel: val = ps.v[p][c.comp]; break;
+      case Q::vel_fluid: val = ps.v_f[p][c.comp]; break;
+      case Q::pore: val = ps.p[p]; break;
+      case Q::porosity: val = ps.n[p]; break;
       case Q::stress: val = ps.sigma[p][c.comp]; break;
       case Q::p_mean: val = mean_stress(ps.sigma[p]); break;
       case Q::q_dev: val = deviatoric_stress(ps.sigma[p]); break;

@@ -24,7 +24,7 @@ class Monitors {
   std::vector<std::string> describe(const State<Dim>& st) const;
 
  private:
-  enum class Q { disp, vel, stress, p_mean, q_dev, eps_p, kinetic, strain, total, work };
+  enum class Q { disp, vel, vel_fluid, stress, p_mean, q_dev, eps_p, pore, porosity, kinetic, strain, total, work };
   struct Column {
     std::int64_t particle;  // particle id, -1 for global
     Q q;

@@ -21,6 +21,14 @@ ParticleSet<Dim> particles_from_cloud(const scene::PointCloud& c, const std::str
   const auto& faces = c.get("faces", where);
   const auto* disp = c.find("displacement");
   const auto* eps_p = c.find("plastic_strain");
+  // Single-point two-phase sets carry the pore fluid on the same points.
+  const auto* pore_pressure = c.find("pore_pressure");
+  const bool two_phase = pore_pressure != nullptr;
+  const auto* porosity = two_phase ? &c.get("porosity", where) : nullptr;
+  const auto* fluid_mass = two_phase ? &c.get("fluid_mass", where) : nullptr;
+  const auto* fluid_material = two_phase ? &c.get("fluid_material", where) : nullptr;
+  const auto* fluid_velocity = c.find("fluid_velocity");
+  if (two_phase) ps.add_fluid();
   for (std::size_t p = 0; p < n; ++p) {
     ps.id[p] = static_cast<std::int64_t>(id.values[p]);
     for (int a = 0; a < Dim; ++a) {
@@ -36,6 +44,13 @@ ParticleSet<Dim> particles_from_cloud(const scene::PointCloud& c, const std::str
     ps.body[p] = static_cast<std::int32_t>(body.values[p]);
     ps.faces[p] = static_cast<std::uint32_t>(faces.values[p]);
     if (eps_p) ps.eps_p[p] = eps_p->values[p];
+    if (two_phase) {
+      ps.n[p] = porosity->values[p];
+      ps.p[p] = pore_pressure->values[p];
+      ps.m_f[p] = fluid_mass->values[p];
+      ps.fluid_material[p] = static_cast<std::int32_t>(fluid_material->values[p]);
+      for (int a = 0; a < Dim; ++a) ps.v_f[p][a] = fluid_velocity ? fluid_velocity->values[3 * p + a] : ps.v[p][a];
+    }
     if (!(ps.m[p] > 0.0) || !(ps.V[p] > 0.0))
       throw std::runtime_error(where + ": particle " + std::to_string(ps.id[p]) +
                                " has non-positive mass or volume");
@@ -66,6 +81,20 @@ scene::PointCloud particles_to_cloud(const ParticleSet<Dim>& ps) {
   auto& material = c.add("material", 1);
   auto& body = c.add("body", 1);
   auto& faces = c.add("faces", 1);
+  if (ps.two_phase()) {
+    auto& pore = c.add("pore_pressure", 1);
+    auto& por = c.add("porosity", 1);
+    auto& mf = c.add("fluid_mass", 1);
+    auto& vf = c.add("fluid_velocity", 3);
+    auto& fm = c.add("fluid_material", 1);
+    for (std::size_t p = 0; p < n; ++p) {
+      pore.values[p] = ps.p[p];
+      por.values[p] = ps.n[p];
+      mf.values[p] = ps.m_f[p];
+      fm.values[p] = ps.fluid_material[p];
+      for (int a = 0; a < Dim; ++a) vf.values[3 * p + a] = ps.v_f[p][a];
+    }
+  }
   for (std::size_t p = 0; p < n; ++p) {
     id.values[p] = static_cast<double>(ps.id[p]);
     mass.values[p] = ps.m[p];

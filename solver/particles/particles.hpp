@@ -31,29 +31,50 @@ struct ParticleSet {
   std::vector<std::int32_t> body;      // index into scene.bodies
   std::vector<std::uint32_t> faces;    // bit f set: on face f (0 x_min, 1 x_max, 2 y_min, ...)
 
+  // Pore fluid carried by the same points (single-point two-phase formulations only; these stay
+  // empty otherwise — the solver models only what the scene has). With them, `sigma` is the
+  // EFFECTIVE stress (tension positive) and `m` the solid mass.
+  std::vector<double> n;               // -, porosity
+  std::vector<double> p;               // Pa, pore pressure, compression positive
+  std::vector<double> m_f;             // kg, pore fluid mass (n rho_f V)
+  std::vector<Vec<Dim>> v_f;           // m/s, pore fluid velocity
+  std::vector<std::int32_t> fluid_material;  // index into scene.materials
+
   std::size_t size() const { return x.size(); }
-  void resize(std::size_t n) {
-    id.resize(n);
-    x.resize(n);
-    x0.resize(n);
-    v.resize(n);
-    l.resize(n);
-    m.resize(n);
-    V.resize(n);
-    V0.resize(n);
-    F.assign(n, Mat3::Identity());
-    L.assign(n, MatD<Dim>::Zero());
-    sigma.assign(n, Sym::Zero());
-    eps_p.assign(n, 0.0);
-    material.resize(n);
-    body.resize(n);
-    faces.resize(n);
+  bool two_phase() const { return carries_fluid_; }
+  /// Allocates the pore-fluid fields (zero) for a set of the current size.
+  void add_fluid() {
+    carries_fluid_ = true;
+    const std::size_t k = size();
+    n.assign(k, 0.0);
+    p.assign(k, 0.0);
+    m_f.assign(k, 0.0);
+    v_f.assign(k, Vec<Dim>::Zero());
+    fluid_material.assign(k, 0);
+  }
+  void resize(std::size_t k) {
+    id.resize(k);
+    x.resize(k);
+    x0.resize(k);
+    v.resize(k);
+    l.resize(k);
+    m.resize(k);
+    V.resize(k);
+    V0.resize(k);
+    F.assign(k, Mat3::Identity());
+    L.assign(k, MatD<Dim>::Zero());
+    sigma.assign(k, Sym::Zero());
+    eps_p.assign(k, 0.0);
+    material.resize(k);
+    body.resize(k);
+    faces.resize(k);
+    if (carries_fluid_) add_fluid();
   }
   /// Calls f(field) for every per-particle array (the one list of fields; resize-free helpers use it).
   template <class Fn>
   void for_each_field(Fn&& f) {
     f(id), f(x), f(x0), f(v), f(l), f(m), f(V), f(V0), f(F), f(L), f(sigma), f(eps_p), f(material), f(body),
-        f(faces);
+        f(faces), f(n), f(p), f(m_f), f(v_f), f(fluid_material);
   }
   /// Bytes held per particle by this set (for run.json and the memory benchmark).
   static constexpr std::size_t bytes_per_particle() {
@@ -66,8 +87,13 @@ struct ParticleSet {
   void copy_state_from(const ParticleSet& o) {
     id = o.id, x = o.x, x0 = o.x0, v = o.v, l = o.l, m = o.m, V = o.V, V0 = o.V0, F = o.F, sigma = o.sigma;
     eps_p = o.eps_p, material = o.material, body = o.body, faces = o.faces;
+    n = o.n, p = o.p, m_f = o.m_f, v_f = o.v_f, fluid_material = o.fluid_material;
+    carries_fluid_ = o.carries_fluid_;
     L.clear();
   }
+
+ private:
+  bool carries_fluid_ = false;
 };
 
 /// Reorders a particle set in place: particle k of the result is particle order[k] before.
@@ -80,6 +106,7 @@ class Reorder {
   void apply(ParticleSet<Dim>& ps, const std::vector<int>& order) {
     const std::size_t n = ps.size();
     ps.for_each_field([&](auto& field) {
+      if (field.size() != n) return;  // fields a formulation does not use stay empty
       using T = typename std::decay_t<decltype(field)>::value_type;
       static_assert(alignof(T) <= alignof(std::max_align_t) && std::is_trivially_destructible_v<T>);
       const std::size_t words = (n * sizeof(T) + sizeof(std::max_align_t) - 1) / sizeof(std::max_align_t);

@@ -1,0 +1,473 @@
+// Formulation `explicit-single-point`: stabilised explicit two-phase MPM on one set of points
+// carrying the soil skeleton and its pore fluid (seed 000, Tang et al., §3.3 and Fig. 3), with the
+// errata of shared/spec/seed-notes.md resolved (docs/formulations.md derives each line).
+//
+// Signs: effective stress sigma' tension positive, pore pressure p compression positive;
+// total stress sigma = sigma' - p I. Units SI; 2D quantities per metre of thickness.
+//
+// One step (named, timed stages; numbers are the paper's sub-steps):
+//   (0) reorder particles into scatter order every 10 steps (memory locality only)
+//   (2) P2G of both phases: masses, momenta, internal forces (eqs. 21, 23), body forces (eq. 22
+//       and the fluid-mass erratum), nodal Darcy drag coefficient (eq. 12), tractions on the solid
+//   (3) nodal accelerations of both phases with the drag integrated implicitly per node (a 2x2
+//       solve per component: no drag time-step limit), boundary conditions for each phase
+//   (4) G2P of both phases (FLIP/PIC blend), positions move with the solid; (5) MUSL remap
+//   (6) strain rates of both phases; cell-average (mass-weighted) volumetric rates (eqs. 26-27)
+//   (8) F, V, porosity (eq. 4 integrated: (1 - n) V is constant), fluid mass n rho_f V — done
+//       before (7) because material models take F_{n+1} on entry
+//   (7) effective stress (material model), pore pressure rate (eq. 9 with the n div v_f erratum)
+//       through the node-based multi-field variational step with Q = [1] (eqs. 33-34)
+#include <omp.h>
+
+#include <limits>
+#include <sstream>
+
+#include "solver/formulation.hpp"
+#include "solver/formulations/registry.hpp"
+#include "solver/loads.hpp"
+#include "solver/materials/material.hpp"
+#include "solver/transfer/transfer.hpp"
+
+namespace swmpm {
+namespace {
+
+constexpr double g_earth = 9.81;  // m/s^2, in the hydraulic-conductivity definition k = rho_f g kappa / mu
+
+/// Fluid and permeability constants of one solid material in a saturated body.
+struct PoreFluid {
+  double rho_f;  // kg/m^3, fluid density
+  double K_f;    // Pa, fluid bulk modulus
+  double k;      // m/s, hydraulic conductivity of the skeleton
+};
+
+template <int Dim, class Shape>
+class ExplicitSinglePoint final : public Formulation<Dim> {
+  static constexpr int S = Shape::support;
+
+ public:
+  ExplicitSinglePoint(const scene::Scene& s, const State<Dim>& state)
+      : grid_(make_grid<Dim>(s, Shape::degree, Shape::bspline)),
+        bcs_solid_(s),
+        bcs_fluid_(GridBoundary<Dim>::fluid(s)),
+        loads_(s, state.solid),
+        flip_(s.solver.flip),
+        damping_(s.solver.damping),
+        smoothing_(s.solver.stabilisation.strain_smoothing),
+        mfvp_(s.solver.stabilisation.pressure == "mfvp-constant"),
+        materials_(make_materials<Dim>(s)),
+        material_particles_(group_by_material(state.solid, s.materials.size())) {
+    const auto& pressure = s.solver.stabilisation.pressure;
+    if (pressure != "none" && pressure != "mfvp-constant")
+      throw std::runtime_error("solver.stabilisation.pressure: \"" + pressure +
+                               "\" is not implemented yet for explicit-single-point (available: none, mfvp-constant)");
+    if (s.solver.stabilisation.fbar != "none")
+      throw std::runtime_error("solver.stabilisation.fbar: F-bar is not implemented yet in this version");
+    if (!state.solid.two_phase())
+      throw std::runtime_error("explicit-single-point needs saturated particles (pore_pressure, porosity, fluid_mass "
+                               "in particles/solid.vtu): run swmpm preprocess with a body that has a solid and a fluid");
+    pore_.resize(s.materials.size(), PoreFluid{0, 0, 0});
+    for (std::size_t k = 0; k < s.materials.size(); ++k) {
+      const auto& m = s.materials[k];
+      if (m.model == scene::MaterialModel::fluid) continue;
+      pore_[k].k = m.has("hydraulic_conductivity") ? m.at("hydraulic_conductivity") : 0.0;
+    }
+    for (std::size_t p = 0; p < state.solid.size(); ++p) {  // fluid of each solid material (first seen)
+      const auto& f = s.materials[state.solid.fluid_material[p]];
+      auto& pf = pore_[state.solid.material[p]];
+      pf.rho_f = f.at("density");
+      pf.K_f = f.at("bulk_modulus");
+      if (pf.k == 0.0 && s.materials[state.solid.material[p]].has("intrinsic_permeability"))
+        pf.k = s.materials[state.solid.material[p]].at("intrinsic_permeability") * pf.rho_f * g_earth /
+               f.at("dynamic_viscosity");
+      if (!(pf.k > 0.0))
+        throw std::runtime_error("material \"" + s.materials[state.solid.material[p]].name +
+                                 "\": a saturated skeleton needs hydraulic_conductivity or intrinsic_permeability");
+    }
+    solid_.resize(grid_.num_nodes());
+    fluid_.resize(grid_.num_nodes());
+    drag_.assign(grid_.num_nodes(), 0.0);
+    pdot_node_.assign(grid_.num_nodes(), 0.0);
+    vol_node_.assign(grid_.num_nodes(), 0.0);
+    std::size_t cells = 1;
+    for (int a = 0; a < Dim; ++a) cells *= static_cast<std::size_t>(grid_.axis(a).cells);
+    cell_sum_.assign(cells, {0.0, 0.0, 0.0, 0.0});
+  }
+
+  std::string name() const override { return "explicit-single-point"; }
+
+  void step(State<Dim>& st, const StepContext& ctx) override {
+    ParticleSet<Dim>& ps = st.solid;
+    const double dt = ctx.dt;
+    Vec<Dim> b;
+    for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
+    double t0 = omp_get_wtime();
+    auto lap = [&](const char* stage) {
+      const double t1 = omp_get_wtime();
+      this->times_.add(stage, t1 - t0);
+      t0 = t1;
+    };
+
+    if (st.step % reorder_interval == 0 && schedule_.order().size() == ps.size() && !schedule_.in_order()) {  // (0)
+      reorder_.apply(ps, schedule_.order());
+      st.index_ids();
+      regroup_by_material(ps, material_particles_);
+      lap("reorder");
+    }
+
+    long bad = -1;
+    box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);
+    if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
+    collect_face_forces(st, ctx);
+    transfer::build_schedule(grid_, sd_, schedule_);
+    clear_nodes();
+    lap("shape functions");
+
+    scatter_both_phases(ps, b);                                                          // (2)
+    for (const FaceForce& ff : face_forces_)
+      shape::for_each_node(grid_, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) { solid_.acc[i].f += N * ff.f; });
+    lap("p2g");
+
+    update_grid(dt);                                                                     // (3)
+    lap("grid update");
+
+    gather_and_remap(ps, dt);                                                            // (4)-(5)
+    bcs_solid_.apply(grid_, box_, solid_.v, false);
+    bcs_fluid_.apply(grid_, box_, fluid_.v, false);
+    lap("g2p + musl remap");
+
+    strain_rates(ps);                                                                    // (6)
+    if (smoothing_) smooth_volumetric_rates(ps);
+    lap("strain rates");
+
+    bad = update_volumes(ps, dt);                                                        // (8)
+    if (bad >= 0) st.health.report(bad, "solid", "volume ratio J <= 0 or porosity outside (0, 1)");
+    lap("volume and porosity");
+
+    // (7) after (8): the material contract wants F_{n+1} on entry (Hencky reads it).
+    for (std::size_t k = 0; k < materials_.size(); ++k) {
+      if (material_particles_[k].empty() || !materials_[k]) continue;
+      const long m_bad = materials_[k]->update_stress(ps, material_particles_[k], dt);
+      if (m_bad >= 0) st.health.report(m_bad, "solid", "stress update failed (" + materials_[k]->name() + ")");
+    }
+    bad = update_pore_pressure(ps, dt);
+    if (bad >= 0) st.health.report(bad, "solid", "pore pressure not finite");
+    lap("stress and pressure");
+  }
+
+  double critical_time_step(const State<Dim>& st, std::string& reason) const override {
+    // Undrained P-wave speed c = sqrt((K' + 4G/3 + K_f / n) / rho_sat) (seed-notes, seed 000);
+    // the drag is implicit at the nodes, so it sets no limit.
+    const ParticleSet<Dim>& ps = st.solid;
+    double c_max = 0.0;
+    for (std::size_t k = 0; k < materials_.size(); ++k) {
+      if (material_particles_[k].empty() || !materials_[k]) continue;
+      for (int p : material_particles_[k]) {
+        const double rho_sat = (ps.m[p] + ps.m_f[p]) / ps.V[p];
+        const double M = materials_[k]->p_wave_modulus() + pore_[k].K_f / ps.n[p];
+        c_max = std::max(c_max, std::sqrt(M / rho_sat));
+      }
+    }
+    double v_max = 0.0;
+    const long n = static_cast<long>(ps.size());
+#pragma omp parallel for reduction(max : v_max) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) v_max = std::max(v_max, std::max(ps.v[p].norm(), ps.v_f[p].norm()));
+    std::ostringstream os;
+    os << "undrained P-wave CFL (c = " << c_max << " m/s incl. K_f/n, |v|max = " << v_max
+       << " m/s); Darcy drag is implicit per node and sets no limit";
+    reason = os.str();
+    return grid_.h() / (c_max + v_max);
+  }
+
+  double kinetic_energy(const State<Dim>& st) const override {
+    const auto& ps = st.solid;
+    return fixed_order_sum(ps.size(), [&](std::size_t p) {
+      return 0.5 * (ps.m[p] * ps.v[p].squaredNorm() + ps.m_f[p] * ps.v_f[p].squaredNorm());
+    });
+  }
+  double strain_energy(const State<Dim>& st) const override {
+    return fixed_order_sum(st.solid.size(), [&](std::size_t p) {
+      return materials_[st.solid.material[p]]->strain_energy(st.solid, static_cast<int>(p));
+    });
+  }
+  double external_power(const State<Dim>& st, const StepContext& ctx) const override {
+    const ParticleSet<Dim>& ps = st.solid;
+    Vec<Dim> b;
+    for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
+    double power = fixed_order_sum(ps.size(), [&](std::size_t p) { return b.dot(ps.m[p] * ps.v[p] + ps.m_f[p] * ps.v_f[p]); });
+    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&) { power += f_p.dot(ps.v[p]); });
+    return power;
+  }
+  std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
+
+ private:
+  struct FaceForce {
+    shape::ShapeData<Dim, S> sd;
+    Vec<Dim> f;
+  };
+
+  void collect_face_forces(const State<Dim>& st, const StepContext& ctx) {
+    face_forces_.clear();
+    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>& offset) {
+      FaceForce ff{{}, f_p};
+      const Vec<Dim> x_face = (st.solid.x[p] + offset).cwiseMax(grid_.min()).cwiseMin(grid_.max());
+      shape::evaluate<Shape>(grid_, x_face, Vec<Dim>::Zero().eval(), ff.sd);
+      for (int a = 0; a < Dim; ++a) {
+        box_.lo[a] = std::min(box_.lo[a], ff.sd.base[a]);
+        box_.hi[a] = std::max(box_.hi[a], ff.sd.base[a] + S - 1);
+      }
+      face_forces_.push_back(ff);
+    });
+  }
+
+  void clear_nodes() {
+    transfer::clear_nodes(grid_, box_, solid_);
+    transfer::clear_nodes(grid_, box_, fluid_);
+    grid_.for_each_node(box_, [&](std::size_t i, const auto&) { drag_[i] = 0.0; });
+  }
+
+  /// (2) eqs. 20-23: m_sI, m_fI, momenta, and
+  ///   f_s = sum_p [ (1 - n_p) p_p V_p grad N - V_p sigma'_p grad N + N m_sp b ]
+  ///   f_f = sum_p [ n_p p_p V_p grad N + N m_fp b ]                   (erratum: fluid mass)
+  ///   D_I = sum_p N n_p^2 rho_f g / k_p V_p   (drag f_d = D (v_s - v_f) per node, eq. 12)
+  void scatter_both_phases(const ParticleSet<Dim>& ps, const Vec<Dim>& b) {
+    schedule_.run([&](int p) {
+      const auto& sp = sd_[p];
+      const PoreFluid& pf = pore_[ps.material[p]];
+      const double V = ps.V[p], n = ps.n[p];
+      const Mat3 s = to_matrix(ps.sigma[p]);
+      const MatD<Dim> Vs = V * s.template topLeftCorner<Dim, Dim>();
+      const double ps_solid = (1.0 - n) * ps.p[p] * V, ps_fluid = n * ps.p[p] * V;  // N m (N in 2D per m)
+      const double m_s = ps.m[p], m_f = ps.m_f[p];
+      const Vec<Dim> mv_s = m_s * ps.v[p], mv_f = m_f * ps.v_f[p];
+      const double drag = n * n * pf.rho_f * g_earth / pf.k * V;
+      shape::for_each_node(grid_, sp, [&](std::size_t i, double N, const Vec<Dim>& dN) {
+        auto& ns = solid_.acc[i];
+        auto& nf = fluid_.acc[i];
+        ns.m += N * m_s;
+        ns.mv += N * mv_s;
+        ns.f += N * m_s * b - Vs * dN + ps_solid * dN;
+        nf.m += N * m_f;
+        nf.mv += N * mv_f;
+        nf.f += N * m_f * b + ps_fluid * dN;
+        drag_[i] += N * drag;
+      });
+    });
+  }
+
+  /// (3) Per node and component, with u = velocities at the end of the step:
+  ///   m_s (u_s - vL_s) = dt F_s - dt D (u_s - u_f),   m_f (u_f - vL_f) = dt F_f + dt D (u_s - u_f)
+  /// solved exactly (2x2); local damping acts on each phase's unbalanced force.
+  void update_grid(double dt) {
+    const double alpha = damping_;
+    auto damp = [alpha](Vec<Dim> f, const Vec<Dim>& v) {
+      if (alpha > 0.0)
+        for (int a = 0; a < Dim; ++a) f[a] -= alpha * std::abs(f[a]) * (v[a] > 0 ? 1.0 : (v[a] < 0 ? -1.0 : 0.0));
+      return f;
+    };
+    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+      const auto& ns = solid_.acc[i];
+      const auto& nf = fluid_.acc[i];
+      const double ms = ns.m, mf = nf.m;
+      const bool has_s = ms > transfer::empty_node_mass, has_f = mf > transfer::empty_node_mass;
+      const Vec<Dim> vLs = has_s ? Vec<Dim>(ns.mv / ms) : Vec<Dim>::Zero();
+      const Vec<Dim> vLf = has_f ? Vec<Dim>(nf.mv / mf) : Vec<Dim>::Zero();
+      solid_.vL[i] = vLs;
+      fluid_.vL[i] = vLf;
+      if (!has_s && !has_f) {
+        solid_.v[i].setZero();
+        fluid_.v[i].setZero();
+        return;
+      }
+      const Vec<Dim> rs = ms * vLs + dt * damp(ns.f, vLs);
+      const Vec<Dim> rf = mf * vLf + dt * damp(nf.f, vLf);
+      const double c = has_s && has_f ? dt * drag_[i] : 0.0;
+      const double det = (ms + c) * (mf + c) - c * c;
+      solid_.v[i] = has_s ? Vec<Dim>(((mf + c) * rs + c * rf) / det) : Vec<Dim>::Zero();
+      fluid_.v[i] = has_f ? Vec<Dim>((c * rs + (ms + c) * rf) / det) : Vec<Dim>::Zero();
+    });
+    bcs_solid_.apply(grid_, box_, solid_.v, true);
+    bcs_fluid_.apply(grid_, box_, fluid_.v, false);
+  }
+
+  /// (4)-(5) FLIP/PIC update of both phases' particle velocities, positions with the solid, and
+  /// the MUSL remap of both momenta (one pass through the stripe schedule).
+  void gather_and_remap(ParticleSet<Dim>& ps, double dt) {
+    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+      solid_.acc[i].mv.setZero();
+      fluid_.acc[i].mv.setZero();
+    });
+    schedule_.run([&](int p) {
+      Vec<Dim> vs = Vec<Dim>::Zero(), vs_old = Vec<Dim>::Zero(), vf = Vec<Dim>::Zero(), vf_old = Vec<Dim>::Zero();
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        vs += N * solid_.v[i];
+        vs_old += N * solid_.vL[i];
+        vf += N * fluid_.v[i];
+        vf_old += N * fluid_.vL[i];
+      });
+      ps.v[p] = flip_ * (ps.v[p] + vs - vs_old) + (1.0 - flip_) * vs;
+      ps.v_f[p] = flip_ * (ps.v_f[p] + vf - vf_old) + (1.0 - flip_) * vf;
+      ps.x[p] += dt * vs;
+      const Vec<Dim> mvs = ps.m[p] * ps.v[p], mvf = ps.m_f[p] * ps.v_f[p];
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        solid_.acc[i].mv += N * mvs;
+        fluid_.acc[i].mv += N * mvf;
+      });
+    });
+    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+      const auto& ns = solid_.acc[i];
+      const auto& nf = fluid_.acc[i];
+      solid_.v[i] = ns.m > transfer::empty_node_mass ? Vec<Dim>(ns.mv / ns.m) : Vec<Dim>::Zero();
+      fluid_.v[i] = nf.m > transfer::empty_node_mass ? Vec<Dim>(nf.mv / nf.m) : Vec<Dim>::Zero();
+    });
+  }
+
+  /// (6) L_s = sum v_s (x) grad N (into ps.L) and div v_f = sum v_f . grad N (eqs. 24-25).
+  void strain_rates(ParticleSet<Dim>& ps) {
+    const long n = static_cast<long>(ps.size());
+    div_f_.resize(ps.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      MatD<Dim> L = MatD<Dim>::Zero();
+      double div_f = 0.0;
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double, const Vec<Dim>& dN) {
+        L.noalias() += solid_.v[i] * dN.transpose();
+        div_f += fluid_.v[i].dot(dN);
+      });
+      ps.L[p] = L;
+      div_f_[p] = div_f;
+    }
+  }
+
+  std::size_t cell_of(const Vec<Dim>& x) const {
+    std::size_t idx = 0;
+    for (int a = Dim - 1; a >= 0; --a) {
+      const auto& ax = grid_.axis(a);
+      idx = idx * ax.cells + shape::cell_of((x[a] - ax.origin) / ax.h, ax.cells);
+    }
+    return idx;
+  }
+
+  /// (6) eqs. 26-27: in each cell, the solid-mass-weighted mean of div v_s and the fluid-mass-
+  /// weighted mean of div v_f replace the particles' own; the deviatoric part of L_s is kept.
+  /// In plane strain the volumetric rate is spread over the Dim in-plane axes (no out-of-plane
+  /// strain rate appears).
+  void smooth_volumetric_rates(ParticleSet<Dim>& ps) {
+    const std::size_t n = ps.size();
+    cell_.resize(n);
+    for (std::size_t p = 0; p < n; ++p) {  // serial: cells are shared; fixed order
+      const std::size_t c = cell_of(ps.x[p]);
+      cell_[p] = c;
+      cell_sum_[c] = {0.0, 0.0, 0.0, 0.0};
+    }
+    for (std::size_t p = 0; p < n; ++p) {
+      auto& cs = cell_sum_[cell_[p]];
+      cs[0] += ps.m[p] * ps.L[p].trace();
+      cs[1] += ps.m[p];
+      cs[2] += ps.m_f[p] * div_f_[p];
+      cs[3] += ps.m_f[p];
+    }
+    const long N = static_cast<long>(n);
+#pragma omp parallel for schedule(static) if (N > parallel_threshold)
+    for (long p = 0; p < N; ++p) {
+      const auto& cs = cell_sum_[cell_[p]];
+      const double div_s = cs[0] / cs[1];
+      ps.L[p] += (div_s - ps.L[p].trace()) / Dim * MatD<Dim>::Identity();
+      if (cs[3] > 0.0) div_f_[p] = cs[2] / cs[3];
+    }
+  }
+
+  /// (7) eq. 9: pdot_p = -(K_f / n)[(1 - n) div v_s + n div v_f]; with mfvp-constant (Q = [1],
+  /// eqs. 33-34): a_I = sum_p N V pdot_p / sum_p N V, pdot_p = sum_I N a_I.
+  long update_pore_pressure(ParticleSet<Dim>& ps, double dt) {
+    const long n = static_cast<long>(ps.size());
+    pdot_.resize(ps.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      const double np = ps.n[p], K_f = pore_[ps.material[p]].K_f;
+      pdot_[p] = -(K_f / np) * ((1.0 - np) * ps.L[p].trace() + np * div_f_[p]);
+    }
+    if (mfvp_) {
+      grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+        pdot_node_[i] = 0.0;
+        vol_node_[i] = 0.0;
+      });
+      schedule_.run([&](int p) {
+        const double V = ps.V[p], q = pdot_[p] * V;
+        shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+          pdot_node_[i] += N * q;
+          vol_node_[i] += N * V;
+        });
+      });
+      grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+        if (vol_node_[i] > 0.0) pdot_node_[i] /= vol_node_[i];
+      });
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+      for (long p = 0; p < n; ++p) {
+        double a = 0.0;
+        shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) { a += N * pdot_node_[i]; });
+        pdot_[p] = a;
+      }
+    }
+    long bad = transfer::no_particle;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      ps.p[p] += dt * pdot_[p];
+      if (!std::isfinite(ps.p[p])) bad = std::min(bad, p);
+    }
+    return bad == transfer::no_particle ? -1 : bad;
+  }
+
+  /// (8) F_{n+1} = dF F_n, V = det F V0; porosity from (1 - n) V = const (eq. 4, incompressible
+  /// grains); fluid mass n rho_f V.
+  long update_volumes(ParticleSet<Dim>& ps, double dt) {
+    const long n = static_cast<long>(ps.size());
+    long bad = transfer::no_particle;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      Mat3 dF = Mat3::Identity();
+      dF.template topLeftCorner<Dim, Dim>() = transfer::deformation_increment<Dim>(ps.L[p], dt);
+      ps.F[p] = dF * ps.F[p];
+      const double V_old = ps.V[p];
+      const double J = ps.F[p].determinant();
+      ps.V[p] = J * ps.V0[p];
+      ps.n[p] = 1.0 - (1.0 - ps.n[p]) * V_old / ps.V[p];
+      ps.m_f[p] = ps.n[p] * pore_[ps.material[p]].rho_f * ps.V[p];
+      if (!(J > 0.0) || !(ps.n[p] > 0.0 && ps.n[p] < 1.0)) bad = std::min(bad, p);
+    }
+    return bad == transfer::no_particle ? -1 : bad;
+  }
+
+  Grid<Dim> grid_;
+  GridBoundary<Dim> bcs_solid_, bcs_fluid_;
+  ParticleLoads<Dim> loads_;
+  double flip_, damping_;
+  bool smoothing_, mfvp_;
+  std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
+  std::vector<std::vector<int>> material_particles_;
+  std::vector<PoreFluid> pore_;  // per solid material
+  NodeFields<Dim> solid_, fluid_;
+  std::vector<double> drag_, pdot_node_, vol_node_;  // per node
+  std::vector<double> div_f_, pdot_;                 // per particle
+  std::vector<std::size_t> cell_;                    // per particle
+  std::vector<std::array<double, 4>> cell_sum_;      // per cell: sum m div v_s, sum m_s, sum m_f div v_f, sum m_f
+  NodeBox<Dim> box_;
+  std::vector<shape::ShapeData<Dim, S>> sd_;
+  std::vector<FaceForce> face_forces_;
+  StripeSchedule schedule_;
+  Reorder<Dim> reorder_;
+  static constexpr long reorder_interval = 10;  // steps
+};
+
+}  // namespace
+
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_explicit_single_point(const scene::Scene& s, const State<Dim>& state) {
+  return dispatch_shape<Dim>(s.grid.shape_function, [&]<class Shape>() -> std::unique_ptr<Formulation<Dim>> {
+    return std::make_unique<ExplicitSinglePoint<Dim, Shape>>(s, state);
+  });
+}
+
+template std::unique_ptr<Formulation<2>> make_explicit_single_point<2>(const scene::Scene&, const State<2>&);
+template std::unique_ptr<Formulation<3>> make_explicit_single_point<3>(const scene::Scene&, const State<3>&);
+
+}  // namespace swmpm
