@@ -16,7 +16,8 @@
 //   (8) F, V, porosity (eq. 4 integrated: (1 - n) V is constant), fluid mass n rho_f V — done
 //       before (7) because material models take F_{n+1} on entry
 //   (7) effective stress (material model), pore pressure rate (eq. 9 with the n div v_f erratum)
-//       through the node-based multi-field variational step with Q = [1] (eqs. 33-34)
+//       through the node-based multi-field variational step with Q = [1], linear or quadratic
+//       (eqs. 33-34)
 #include <omp.h>
 
 #include <limits>
@@ -53,13 +54,13 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
         flip_(s.solver.flip),
         damping_(s.solver.damping),
         smoothing_(s.solver.stabilisation.strain_smoothing),
-        mfvp_(s.solver.stabilisation.pressure == "mfvp-constant"),
+        mfvp_order_(mfvp_order(s.solver.stabilisation.pressure)),
         materials_(make_materials<Dim>(s)),
         material_particles_(group_by_material(state.solid, s.materials.size())) {
     const auto& pressure = s.solver.stabilisation.pressure;
-    if (pressure != "none" && pressure != "mfvp-constant")
-      throw std::runtime_error("solver.stabilisation.pressure: \"" + pressure +
-                               "\" is not implemented yet for explicit-single-point (available: none, mfvp-constant)");
+    if (pressure == "node-remap")
+      throw std::runtime_error("solver.stabilisation.pressure: \"node-remap\" belongs to the semi-implicit "
+                               "formulations (available here: none, mfvp-constant, mfvp-linear, mfvp-quadratic)");
     if (s.solver.stabilisation.fbar != "none")
       throw std::runtime_error("solver.stabilisation.fbar: F-bar is not implemented yet in this version");
     if (!state.solid.two_phase())
@@ -86,8 +87,6 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     solid_.resize(grid_.num_nodes());
     fluid_.resize(grid_.num_nodes());
     drag_.assign(grid_.num_nodes(), 0.0);
-    pdot_node_.assign(grid_.num_nodes(), 0.0);
-    vol_node_.assign(grid_.num_nodes(), 0.0);
     std::size_t cells = 1;
     for (int a = 0; a < Dim; ++a) cells *= static_cast<std::size_t>(grid_.axis(a).cells);
     cell_sum_.assign(cells, {0.0, 0.0, 0.0, 0.0});
@@ -376,8 +375,15 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     }
   }
 
-  /// (7) eq. 9: pdot_p = -(K_f / n)[(1 - n) div v_s + n div v_f]; with mfvp-constant (Q = [1],
-  /// eqs. 33-34): a_I = sum_p N V pdot_p / sum_p N V, pdot_p = sum_I N a_I.
+  static int mfvp_order(const std::string& pressure) {
+    if (pressure == "mfvp-constant") return 0;
+    if (pressure == "mfvp-linear") return 1;
+    if (pressure == "mfvp-quadratic") return 2;
+    return -1;
+  }
+
+  /// (7) eq. 9: pdot_p = -(K_f / n)[(1 - n) div v_s + n div v_f], then the node-based multi-field
+  /// variational step (eqs. 33-34) with the basis Q of `mfvp_order_`.
   long update_pore_pressure(ParticleSet<Dim>& ps, double dt) {
     const long n = static_cast<long>(ps.size());
     pdot_.resize(ps.size());
@@ -386,28 +392,9 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       const double np = ps.n[p], K_f = pore_[ps.material[p]].K_f;
       pdot_[p] = -(K_f / np) * ((1.0 - np) * ps.L[p].trace() + np * div_f_[p]);
     }
-    if (mfvp_) {
-      grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
-        pdot_node_[i] = 0.0;
-        vol_node_[i] = 0.0;
-      });
-      schedule_.run([&](int p) {
-        const double V = ps.V[p], q = pdot_[p] * V;
-        shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
-          pdot_node_[i] += N * q;
-          vol_node_[i] += N * V;
-        });
-      });
-      grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
-        if (vol_node_[i] > 0.0) pdot_node_[i] /= vol_node_[i];
-      });
-#pragma omp parallel for schedule(static) if (n > parallel_threshold)
-      for (long p = 0; p < n; ++p) {
-        double a = 0.0;
-        shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) { a += N * pdot_node_[i]; });
-        pdot_[p] = a;
-      }
-    }
+    if (mfvp_order_ == 0) mfvp<0>(ps);
+    if (mfvp_order_ == 1) mfvp<1>(ps);
+    if (mfvp_order_ == 2) mfvp<2>(ps);
     long bad = transfer::no_particle;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
@@ -415,6 +402,92 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       if (!std::isfinite(ps.p[p])) bad = std::min(bad, p);
     }
     return bad == transfer::no_particle ? -1 : bad;
+  }
+
+  /// Number of basis functions of order `Order` in Dim dimensions: 1, 1 + Dim, (Dim+1)(Dim+2)/2.
+  template <int Order>
+  static constexpr int basis_size() {
+    return Order == 0 ? 1 : (Order == 1 ? 1 + Dim : (Dim + 1) * (Dim + 2) / 2);
+  }
+  /// Q at offset d = x_p - x_I (centred at the node, in cells, to keep H_I well conditioned):
+  /// [1], [1, dx, dy(, dz)], or [1, dx, dy, dx^2, dx dy, dy^2] (and z terms in 3D).
+  template <int Order>
+  static Eigen::Matrix<double, basis_size<Order>(), 1> basis(const Vec<Dim>& d) {
+    Eigen::Matrix<double, basis_size<Order>(), 1> q;
+    q[0] = 1.0;
+    if constexpr (Order >= 1)
+      for (int a = 0; a < Dim; ++a) q[1 + a] = d[a];
+    if constexpr (Order == 2) {
+      int k = 1 + Dim;
+      for (int a = 0; a < Dim; ++a)
+        for (int b = a; b < Dim; ++b) q[k++] = d[a] * d[b];
+    }
+    return q;
+  }
+
+  /// eqs. 33-34, node-based: H_I = sum_p Q Q^T N V, a_I = H_I^-1 sum_p N Q pdot_p V (the sign of
+  /// eq. 33 folded into pdot_p), pdot_p = sum_I N_Ip Q_p^T a_I, Q centred at node I. A node whose
+  /// H_I is singular (too few particles for the basis) falls back to the constant basis.
+  template <int Order>
+  void mfvp(const ParticleSet<Dim>& ps) {
+    constexpr int NQ = basis_size<Order>();
+    using VecQ = Eigen::Matrix<double, NQ, 1>;
+    using MatQ = Eigen::Matrix<double, NQ, NQ>;
+    const std::size_t nodes = grid_.num_nodes();
+    if (mfvp_H_.size() != nodes * NQ * NQ) {
+      mfvp_H_.assign(nodes * NQ * NQ, 0.0);
+      mfvp_b_.assign(nodes * NQ, 0.0);
+    }
+    auto H = [&](std::size_t i) { return Eigen::Map<MatQ>(mfvp_H_.data() + i * NQ * NQ); };
+    auto rhs = [&](std::size_t i) { return Eigen::Map<VecQ>(mfvp_b_.data() + i * NQ); };
+    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+      H(i).setZero();
+      rhs(i).setZero();
+    });
+    const double inv_h = 1.0 / grid_.h();
+    auto offset = [&](int p, std::size_t i) {
+      std::array<int, Dim> ijk;
+      std::size_t r = i;
+      for (int a = 0; a < Dim; ++a) {
+        ijk[a] = static_cast<int>(r % grid_.nodes_per_axis()[a]);
+        r /= grid_.nodes_per_axis()[a];
+      }
+      return Vec<Dim>((ps.x[p] - grid_.node_position(ijk)) * inv_h);
+    };
+    // Positions are those the shape data were evaluated at (start of step) for Order 0; for
+    // higher orders the current positions serve as the quadrature points of the projection.
+    schedule_.run([&](int p) {
+      const double V = ps.V[p];
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        if (N <= 0.0) return;
+        const VecQ q = basis<Order>(offset(p, i));
+        H(i).noalias() += (N * V) * q * q.transpose();
+        rhs(i).noalias() += (N * V * pdot_[p]) * q;
+      });
+    });
+    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+      if (!(H(i)(0, 0) > 0.0)) return;
+      VecQ a = VecQ::Zero();
+      if constexpr (NQ > 1) {
+        Eigen::LDLT<MatQ> ldlt(H(i));
+        const double cond = ldlt.vectorD().cwiseAbs().minCoeff() / ldlt.vectorD().cwiseAbs().maxCoeff();
+        if (ldlt.info() == Eigen::Success && cond > 1e-8) a = ldlt.solve(rhs(i));
+        else a[0] = rhs(i)[0] / H(i)(0, 0);  // too few particles for the basis: constant
+      } else {
+        a[0] = rhs(i)[0] / H(i)(0, 0);
+      }
+      rhs(i) = a;  // the node's coefficients
+    });
+    const long n = static_cast<long>(ps.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      double value = 0.0;
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        if (N <= 0.0 || !(H(i)(0, 0) > 0.0)) return;
+        value += N * basis<Order>(offset(static_cast<int>(p), i)).dot(rhs(i));
+      });
+      pdot_[p] = value;
+    }
   }
 
   /// (8) F_{n+1} = dF F_n, V = det F V0; porosity from (1 - n) V = const (eq. 4, incompressible
@@ -441,12 +514,14 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   GridBoundary<Dim> bcs_solid_, bcs_fluid_;
   ParticleLoads<Dim> loads_;
   double flip_, damping_;
-  bool smoothing_, mfvp_;
+  bool smoothing_;
+  int mfvp_order_;  // -1 none, 0 constant, 1 linear, 2 quadratic basis Q
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
   std::vector<std::vector<int>> material_particles_;
   std::vector<PoreFluid> pore_;  // per solid material
   NodeFields<Dim> solid_, fluid_;
-  std::vector<double> drag_, pdot_node_, vol_node_;  // per node
+  std::vector<double> drag_;                         // per node
+  std::vector<double> mfvp_H_, mfvp_b_;              // per node: H_I and rhs / coefficients a_I
   std::vector<double> div_f_, pdot_;                 // per particle
   std::vector<std::size_t> cell_;                    // per particle
   std::vector<std::array<double, 4>> cell_sum_;      // per cell: sum m div v_s, sum m_s, sum m_f div v_f, sum m_f
