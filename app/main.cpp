@@ -1,8 +1,12 @@
 // swmpm — the command (interface.md §1): preprocess | solve | postprocess | run | element.
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+#include <fstream>
 #include <iostream>
+#include <limits>
 #include <string>
+#include <vector>
 
 #include "postprocess/postprocess.hpp"
 #include "preprocess/preprocess.hpp"
@@ -12,16 +16,146 @@
 
 namespace {
 
-int postprocess_command(const std::string& run_dir, const std::vector<std::string>& args, bool quiet) {
-  const std::string cmd = args.empty() ? "plot" : args[0];
-  if (cmd == "plot" && args.size() <= 1) {
-    for (const auto& f : swmpm::post::plot_monitors(run_dir))
-      if (!quiet) std::cout << "plot: " << f << "\n";
-    return 0;
+/// What `swmpm postprocess RUN_DIR COMMAND ...` was given; one struct for every command.
+struct PostArgs {
+  std::string command;  // history | profile | compare | plot | report; empty: plot
+  std::string point, from, to, phase = "solid", quantity, method = "nearest", out;
+  double radius = 0.0, time = 0.0;  // m, s
+  int points = 50;
+  std::string monitor, reference, reference_column;
+  double tolerance = std::numeric_limits<double>::quiet_NaN();  // NaN: no check
+  std::vector<std::string> references;                          // NAME.QUANTITY=FILE.csv
+  std::string field, times;
+};
+
+void add_postprocess_commands(CLI::App* post, PostArgs& a, bool& quiet) {
+  auto command = [&](const char* name, const char* help) {
+    auto* sub = post->add_subcommand(name, help);
+    sub->callback([&a, name] { a.command = name; });
+    sub->add_flag("-q,--quiet", quiet, "No terminal output except results and errors");
+    return sub;
+  };
+  auto phase = [&](CLI::App* sub) {
+    sub->add_option("--phase", a.phase, "solid (default) or fluid")->check(CLI::IsMember({"solid", "fluid"}));
+  };
+  auto sampling = [&](CLI::App* sub) {
+    sub->add_option("--method", a.method,
+                    "nearest (default): the nearest particle; interpolate: kernel average within --radius")
+        ->check(CLI::IsMember({"nearest", "interpolate"}));
+    sub->add_option("--radius", a.radius, "Sampling radius [m] (default 1.5 x the particle spacing)")
+        ->check(CLI::PositiveNumber);
+    sub->add_option("--quantity", a.quantity, "e.g. displacement_y, stress_yy, mean_effective_stress")->required();
+    sub->add_option("--out", a.out, "CSV file (default: standard output)");
+  };
+  post->require_subcommand(0, 1);
+  post->footer("Without a command: plot (every monitor into RUN_DIR/plots). COMMAND --help for its options.");
+
+  auto* history = command("history", "A quantity at a point through every frame (CSV: time,<quantity>)");
+  history->add_option("--point", a.point, "X,Y[,Z] in m")->required();
+  phase(history);
+  sampling(history);
+
+  auto* profile = command("profile", "A quantity along a segment in the frame nearest a time (CSV: s,x,y[,z],<quantity>)");
+  profile->add_option("--from", a.from, "X,Y[,Z] in m")->required();
+  profile->add_option("--to", a.to, "X,Y[,Z] in m")->required();
+  profile->add_option("--time", a.time, "Time [s]; the nearest frame is used")->required();
+  profile->add_option("--points", a.points, "Points along the segment (default 50)")->check(CLI::Range(2, 1000000));
+  phase(profile);
+  sampling(profile);
+
+  auto* compare = command("compare", "Error norms of a monitor against a reference curve");
+  compare->add_option("--monitor", a.monitor, "Column of monitors.csv, MONITOR.QUANTITY")->required();
+  compare->add_option("--reference", a.reference, "CSV: time, value (header and # comments optional)")->required();
+  compare->add_option("--reference-column", a.reference_column, "Value column by header name (default: the second)");
+  compare->add_option("--tolerance", a.tolerance, "Exit 1 when the relative L2 error is larger")
+      ->check(CLI::NonNegativeNumber);
+
+  auto* plot = command("plot", "PNGs in RUN_DIR/plots: every monitor (default), or field snapshots");
+  plot->add_option("--reference", a.references, "MONITOR.QUANTITY=FILE.csv: overlay a reference curve (repeatable)");
+  plot->add_option("--field", a.field, "Draw the particles coloured by this quantity");
+  plot->add_option("--times", a.times, "t1,t2,... [s] for --field (default: the last frame)");
+  phase(plot);
+
+  auto* report = command("report", "RUN_DIR/report.md: setup, cost, comparisons, plots");
+  report->add_option("--reference", a.references, "MONITOR.QUANTITY=FILE.csv: add a comparison (repeatable)");
+}
+
+/// Writes a history or profile CSV to --out or standard output.
+void emit_csv(const swmpm::post::CsvResult& r, const PostArgs& a, bool quiet) {
+  if (a.out.empty()) {
+    swmpm::post::write_csv(r, std::cout);
+    return;
   }
-  std::cerr << "swmpm postprocess: \"" << cmd
-            << "\" is not implemented yet in this version (available: plot with no options)\n";
-  return 2;
+  std::ofstream out(a.out);
+  if (!out) throw std::runtime_error(a.out + ": cannot write file");
+  swmpm::post::write_csv(r, out);
+  if (!out) throw std::runtime_error(a.out + ": write failed");
+  if (!quiet) std::cout << a.command << ": " << a.out << " (" << r.rows.size() << " rows)\n";
+}
+
+int postprocess_command(const std::string& run_dir, const PostArgs& a, bool quiet) {
+  namespace post = swmpm::post;
+  const std::string cmd = a.command.empty() ? "plot" : a.command;
+  std::vector<post::ReferenceSpec> refs;
+  try {
+    for (const auto& r : a.references) refs.push_back(post::parse_reference_spec(r));
+    if (cmd == "history") {
+      post::HistoryOptions o;
+      o.point = post::parse_point(a.point, "--point", &o.point_coordinates);
+      o.phase = a.phase;
+      o.quantity = a.quantity;
+      o.method = post::parse_method(a.method);
+      o.radius = a.radius;
+      emit_csv(post::history(run_dir, o), a, quiet);
+    } else if (cmd == "profile") {
+      post::ProfileOptions o;
+      int from_n = 0, to_n = 0;
+      o.from = post::parse_point(a.from, "--from", &from_n);
+      o.to = post::parse_point(a.to, "--to", &to_n);
+      o.point_coordinates = std::min(from_n, to_n);
+      o.time = a.time;
+      o.phase = a.phase;
+      o.quantity = a.quantity;
+      o.points = a.points;
+      o.method = post::parse_method(a.method);
+      o.radius = a.radius;
+      std::string note;
+      const auto r = post::profile(run_dir, o, &note);
+      // Standard output may be the CSV itself: the frame note then goes to stderr.
+      if (!quiet) (a.out.empty() ? std::cerr : std::cout) << "profile: " << note << "\n";
+      emit_csv(r, a, quiet);
+    } else if (cmd == "compare") {
+      const auto c = post::compare(run_dir, a.monitor, a.reference, a.reference_column);
+      if (!quiet) std::cout << post::describe(c);
+      if (!std::isnan(a.tolerance)) {
+        if (!(c.rel_l2 <= a.tolerance)) {
+          std::cerr << "swmpm postprocess compare: relative L2 error " << c.rel_l2 << " of " << c.monitor
+                    << " against " << c.reference << " is over the tolerance " << a.tolerance << "\n";
+          return 1;
+        }
+        if (!quiet) std::cout << "  within tolerance " << a.tolerance << "\n";
+      }
+    } else if (cmd == "plot") {
+      if (!a.times.empty() && a.field.empty()) throw std::runtime_error("--times needs --field QUANTITY");
+      std::vector<std::string> files;
+      if (a.field.empty() || !refs.empty()) files = post::plot_monitors(run_dir, refs);
+      if (!a.field.empty()) {
+        const auto times = a.times.empty()
+                               ? std::vector<double>{post::RunSeries(run_dir, a.phase).frames().back().time}
+                               : post::parse_times(a.times, "--times");
+        for (const auto& f : post::plot_fields(run_dir, a.field, times, a.phase)) files.push_back(f);
+      }
+      if (!quiet)
+        for (const auto& f : files) std::cout << "plot: " << f << "\n";
+    } else if (cmd == "report") {
+      const std::string path = post::write_report(run_dir, refs);
+      if (!quiet) std::cout << "report: " << path << "\n";
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "swmpm postprocess " << cmd << ": " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
 }
 
 }  // namespace
@@ -35,7 +169,7 @@ int main(int argc, char** argv) {
 
   std::string scene_path, out_dir, run_dir;
   int threads = 0;
-  std::vector<std::string> post_args;
+  PostArgs post_args;
 
   auto* pre = app.add_subcommand("preprocess", "Seed particles from the scene's geometry into RUN_DIR");
   pre->add_option("scene", scene_path, "Scene file (JSON)")->required();
@@ -50,7 +184,7 @@ int main(int argc, char** argv) {
 
   auto* post = app.add_subcommand("postprocess", "Histories, profiles, comparisons, plots, reports");
   post->add_option("run_dir", run_dir, "Run directory")->required();
-  post->add_option("command", post_args, "plot (default)");
+  add_postprocess_commands(post, post_args, quiet);
 
   auto* run = app.add_subcommand("run", "preprocess + solve + postprocess plot in one go");
   run->add_option("scene", scene_path, "Scene file (JSON)")->required();

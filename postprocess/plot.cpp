@@ -1,74 +1,252 @@
+// PNG plots a person looks at: monitor histories (with reference curves) and field snapshots.
+// gnuplot (pngcairo) runs as a subprocess fed a script on stdin; the data go through temporary
+// files of plain numbers, so no plot depends on how a CSV's header or comments look.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
 
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include "postprocess/format.hpp"
 #include "postprocess/postprocess.hpp"
 
 namespace fs = std::filesystem;
 
 namespace swmpm::post {
 
-const std::vector<double>& Table::column(const std::string& name) const {
-  for (std::size_t k = 0; k < names.size(); ++k)
-    if (names[k] == name) return columns[k];
-  throw std::runtime_error("no column \"" + name + "\"");
-}
+namespace {
 
-Table read_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open file");
-  Table t;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::stringstream ss(line);
-    std::string cell;
-    if (t.names.empty()) {
-      while (std::getline(ss, cell, ',')) t.names.push_back(cell);
-      t.columns.resize(t.names.size());
-      continue;
-    }
-    std::size_t k = 0;
-    while (std::getline(ss, cell, ',') && k < t.columns.size()) t.columns[k++].push_back(std::stod(cell));
-    if (k != t.names.size()) throw std::runtime_error(path + ": ragged row: " + line);
+/// A private temporary folder, removed with everything in it when it goes out of scope.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "swmpm-plot-XXXXXX").string();
+    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("cannot create a temporary folder in " + fs::temp_directory_path().string());
+    path_ = pattern;
   }
-  if (t.names.empty()) throw std::runtime_error(path + ": no header line");
-  return t;
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  fs::path path_;
+};
+
+/// A string for a single-quoted gnuplot literal: a quote inside is written twice.
+std::string quoted(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
 }
 
-std::vector<std::string> plot_monitors(const std::string& run_dir) {
+/// Runs gnuplot on `script`; throws with gnuplot's first error line unless `png` was written.
+void run_gnuplot(const std::string& script, const fs::path& png, const TempDir& tmp) {
+  const fs::path log = tmp / "gnuplot.log";
+  FILE* pipe = popen(("gnuplot > " + log.string() + " 2>&1").c_str(), "w");
+  if (pipe == nullptr) throw std::runtime_error("cannot start gnuplot (apt-get install gnuplot-nox)");
+  std::fputs(script.c_str(), pipe);
+  const int rc = pclose(pipe);
+  std::error_code ec;
+  if (rc == 0 && fs::exists(png) && fs::file_size(png, ec) > 0) return;
+  std::ifstream in(log);
+  std::string line, first;
+  while (std::getline(in, line))
+    if (!line.empty() && line.find_first_not_of(" ^") != std::string::npos && first.empty()) first = line;
+  if (first.find("not found") != std::string::npos) first = "gnuplot not found (apt-get install gnuplot-nox)";
+  throw std::runtime_error("gnuplot failed to draw " + png.string() + (first.empty() ? "" : ": " + first));
+}
+
+/// Writes columns of numbers, one row per line, for gnuplot.
+void write_columns(const fs::path& path, const std::vector<const std::vector<double>*>& cols) {
+  std::ofstream out(path);
+  out.precision(10);
+  for (std::size_t i = 0; i < cols.front()->size(); ++i) {
+    for (std::size_t c = 0; c < cols.size(); ++c) out << (c ? " " : "") << (*cols[c])[i];
+    out << "\n";
+  }
+  if (!out) throw std::runtime_error(path.string() + ": cannot write a temporary plot file");
+}
+
+std::string label(const std::string& quantity, int dimension) {
+  const std::string u = unit_of(quantity, dimension);
+  return u.empty() ? quantity : quantity + " [" + u + "]";
+}
+
+/// A tick step of 1, 2 or 5 × 10^k giving about `count` ticks over `range`.
+double nice_step(double range, double count) {
+  const double raw = range / std::max(count, 1.0);
+  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double f : {1.0, 2.0, 5.0})
+    if (f * mag >= raw) return f * mag;
+  return 10.0 * mag;
+}
+
+/// The run's dimension (2 or 3) from RUN_DIR/run.json or scene.json; 2 when neither says.
+int run_dimension(const fs::path& dir) {
+  for (const char* name : {"run.json", "scene.json"}) {
+    std::ifstream in(dir / name);
+    if (!in) continue;
+    try {
+      const int d = nlohmann::json::parse(in).value("dimension", 0);
+      if (d == 2 || d == 3) return d;
+    } catch (const std::exception&) {
+    }
+  }
+  return 2;
+}
+
+}  // namespace
+
+std::vector<std::string> plot_monitors(const std::string& run_dir, const std::vector<ReferenceSpec>& references) {
   const fs::path dir(run_dir);
+  if (!fs::is_directory(dir)) throw std::runtime_error(run_dir + ": not a run directory (no such directory)");
   const fs::path csv = dir / "monitors.csv";
+  if (!fs::exists(csv)) throw std::runtime_error(csv.string() + ": missing (run `swmpm solve " + run_dir + "` first)");
   const Table t = read_csv(csv.string());
+  if (t.columns.empty() || t.columns.front().empty()) throw std::runtime_error(csv.string() + ": no rows to plot");
+  const int dim = run_dimension(dir);
+  TempDir tmp;
+  // Each reference becomes a two-column file; a spec that names no column is an error, not a
+  // silently missing curve.
+  std::map<std::string, std::vector<std::pair<fs::path, std::string>>> overlays;
+  for (std::size_t r = 0; r < references.size(); ++r) {
+    const auto& ref = references[r];
+    if (!t.has(ref.column)) {
+      std::string list;
+      for (std::size_t k = 1; k < t.names.size(); ++k) list += (list.empty() ? "" : ", ") + t.names[k];
+      throw std::runtime_error("--reference " + ref.column + "=" + ref.path + ": not a column of monitors.csv (available: " + list + ")");
+    }
+    const Curve c = read_reference(ref.path);
+    const fs::path data = tmp / ("reference" + std::to_string(r) + ".dat");
+    write_columns(data, {&c.t, &c.v});
+    overlays[ref.column].push_back({data, "reference: " + fs::path(ref.path).filename().string() + " (" + c.name + ")"});
+  }
   // Group columns "<monitor>.<quantity>" by monitor.
   std::map<std::string, std::vector<std::size_t>> groups;
-  for (std::size_t k = 1; k < t.names.size(); ++k)
-    groups[t.names[k].substr(0, t.names[k].find('.'))].push_back(k);
+  for (std::size_t k = 1; k < t.names.size(); ++k) groups[t.names[k].substr(0, t.names[k].find('.'))].push_back(k);
+  const fs::path run_data = tmp / "monitors.dat";
+  std::vector<const std::vector<double>*> cols;
+  for (const auto& c : t.columns) cols.push_back(&c);
+  write_columns(run_data, cols);
   fs::create_directories(dir / "plots");
   std::vector<std::string> written;
-  for (const auto& [monitor, cols] : groups) {
+  for (const auto& [monitor, panel_cols] : groups) {
     const fs::path png = dir / "plots" / (monitor + ".png");
-    const int rows = static_cast<int>(cols.size());
+    const int rows = static_cast<int>(panel_cols.size());
     std::ostringstream gp;
-    gp << "set terminal pngcairo size 900," << 260 * rows + 60 << " font 'Sans,10'\n"
-       << "set output '" << png.string() << "'\n"
-       << "set datafile separator ','\nset datafile commentschars '#'\nset key autotitle columnhead\n"
-       << "set grid\nset multiplot layout " << rows << ",1 title 'monitor " << monitor << "'\n";
-    for (std::size_t c : cols) {
-      gp << "set xlabel 'time [s]'\nset ylabel '" << t.names[c].substr(monitor.size() + 1) << "' noenhanced\n"
-         << "plot '" << csv.string() << "' using 1:" << c + 1 << " with lines lw 2 title '" << t.names[c]
-         << "' noenhanced\n";
+    gp << "set terminal pngcairo size 900," << 260 * rows + 60 << " font 'Sans,10' noenhanced\n"
+       << "set output " << quoted(png.string()) << "\n"
+       << "set grid\nset key top right opaque box\nset format y '%g'\n"
+       << "set multiplot layout " << rows << ",1 title " << quoted("monitor " + monitor + " (" + run_dir + ")") << "\n";
+    for (std::size_t c : panel_cols) {
+      const std::string quantity = t.names[c].substr(monitor.size() + 1);
+      gp << "set xlabel 'time [s]'\nset ylabel " << quoted(label(quantity, dim)) << "\n"
+         << "plot " << quoted(run_data.string()) << " using 1:" << c + 1 << " with lines lw 2 lc rgb '#1b6ca8' title "
+         << quoted(t.names[c] + " (run)");
+      for (const auto& [data, title] : overlays[t.names[c]])
+        gp << ", " << quoted(data.string()) << " using 1:2 with linespoints dt 2 lw 1.5 pt 6 ps 0.8 lc rgb '#d95f02' title "
+           << quoted(title);
+      gp << "\n";
     }
     gp << "unset multiplot\n";
-    FILE* pipe = popen("gnuplot 2>&1", "w");
-    if (pipe == nullptr) throw std::runtime_error("cannot start gnuplot (apt-get install gnuplot-nox)");
-    std::fputs(gp.str().c_str(), pipe);
-    const int rc = pclose(pipe);
-    if (rc != 0 || !fs::exists(png))
-      throw std::runtime_error("gnuplot failed to draw " + png.string() + " (apt-get install gnuplot-nox)");
+    run_gnuplot(gp.str(), png, tmp);
+    written.push_back(png.string());
+  }
+  return written;
+}
+
+std::vector<std::string> plot_fields(const std::string& run_dir, const std::string& quantity,
+                                     const std::vector<double>& times, const std::string& phase) {
+  const RunSeries series(run_dir, phase);
+  const int dim = series.dimension();
+  const fs::path plots = fs::path(run_dir) / "plots";
+  fs::create_directories(plots);
+  TempDir tmp;
+  std::vector<std::string> written;
+  for (double t_req : times) {
+    const std::size_t k = series.nearest_frame(t_req);
+    const auto frame = series.load(k);
+    const Quantity q(frame, quantity, series.fluid_on_solid_frames());
+    const double h = particle_spacing(frame, dim);
+    const auto* half = frame.find("half_size");
+    // 3D: the layer of particles nearest the middle of the body in z, seen along z.
+    double z_layer = 0.0;
+    if (dim == 3) {
+      double z_lo = frame.points[0][2], z_hi = z_lo;
+      for (const auto& x : frame.points) z_lo = std::min(z_lo, x[2]), z_hi = std::max(z_hi, x[2]);
+      const double z_mid = 0.5 * (z_lo + z_hi);
+      z_layer = z_lo;
+      for (const auto& x : frame.points)
+        if (std::abs(x[2] - z_mid) < std::abs(z_layer - z_mid)) z_layer = x[2];
+    }
+    std::vector<double> xs, ys, hx, hy, vs;
+    for (std::size_t p = 0; p < frame.size(); ++p) {
+      if (dim == 3 && std::abs(frame.points[p][2] - z_layer) > 0.5 * h) continue;
+      const double v = q(p);
+      if (!std::isfinite(v)) continue;
+      xs.push_back(frame.points[p][0]);
+      ys.push_back(frame.points[p][1]);
+      // Each particle is drawn as its domain (initial half-size).
+      hx.push_back(half ? half->values[3 * p] : 0.5 * h);
+      hy.push_back(half ? half->values[3 * p + 1] : 0.5 * h);
+      vs.push_back(v);
+    }
+    if (xs.empty()) throw std::runtime_error(series.frames()[k].path + ": no particle to draw");
+    // Equal scales: the picture's shape follows the body's, its longer side about 800 px.
+    const auto [x_lo, x_hi] = std::minmax_element(xs.begin(), xs.end());
+    const auto [y_lo, y_hi] = std::minmax_element(ys.begin(), ys.end());
+    // A margin of a particle spacing, at least 2 % of the larger extent, keeps the body off the frame.
+    const double pad = std::max(h, 0.02 * std::max(*x_hi - *x_lo, *y_hi - *y_lo));
+    const double x0 = *x_lo - pad, x1 = *x_hi + pad, y0 = *y_lo - pad, y1 = *y_hi + pad;
+    const double scale = 800.0 / std::max(x1 - x0, y1 - y0);  // px per m
+    const double plot_w = (x1 - x0) * scale, plot_h = (y1 - y0) * scale;
+    // Squares grown by 0.75 px overlap their neighbours: antialiased edges leave no light seams.
+    for (auto& l : hx) l += 0.75 / scale;
+    for (auto& l : hy) l += 0.75 / scale;
+    const fs::path data = tmp / ("field" + std::to_string(k) + ".dat");
+    write_columns(data, {&xs, &ys, &hx, &hy, &vs});
+    const int width = static_cast<int>(std::max(560.0, plot_w + 300.0));
+    const int height = static_cast<int>(std::max(420.0, plot_h + 150.0));
+    const auto [v_lo_it, v_hi_it] = std::minmax_element(vs.begin(), vs.end());
+    double v_lo = *v_lo_it, v_hi = *v_hi_it;
+    if (v_hi - v_lo <= 1e-12 * std::max(std::abs(v_lo), std::abs(v_hi))) {  // a uniform field
+      const double spread = v_lo != 0.0 ? 0.01 * std::abs(v_lo) : 1.0;
+      v_lo -= spread;
+      v_hi += spread;
+    }
+    const double t = series.frames()[k].time;
+    std::string title = label(quantity, dim) + " at t = " + num(t) + " s";
+    if (std::abs(t - t_req) > 1e-9 * std::max(1.0, std::abs(t_req))) title += " (frame nearest " + num(t_req) + " s)";
+    if (dim == 3) title += ", particles at z = " + num(z_layer) + " m";
+
+    const fs::path png = plots / ("field_" + quantity + "_" + num(t_req) + ".png");
+    std::ostringstream gp;
+    gp << "set terminal pngcairo size " << width << "," << height << " font 'Sans,11' noenhanced\n"
+       << "set output " << quoted(png.string()) << "\n"
+       << "set title " << quoted(title) << "\nset size ratio -1\n"
+       << "set xrange [" << x0 << ":" << x1 << "]\nset yrange [" << y0 << ":" << y1 << "]\n"
+       << "set xtics " << nice_step(x1 - x0, std::max(2.0, plot_w / 90.0)) << "\nset ytics "
+       << nice_step(y1 - y0, std::max(2.0, plot_h / 60.0)) << "\n"
+       << "set format x '%g'\nset format y '%g'\nset format cb '%g'\n"
+       << "set xlabel 'x [m]'\nset ylabel 'y [m]'\nset cblabel " << quoted(label(quantity, dim)) << "\n"
+       << "set cbrange [" << v_lo << ":" << v_hi << "]\n"
+       // viridis: ordered in lightness, readable in grey and by colour-blind readers
+       << "set palette defined (0 '#440154', 1 '#3b528b', 2 '#21918c', 3 '#5ec962', 4 '#fde725')\n"
+       << "plot " << quoted(data.string())
+       << " using 1:2:3:4:5 with boxxyerror fs solid 1.0 noborder lc palette z notitle\n";
+    run_gnuplot(gp.str(), png, tmp);
     written.push_back(png.string());
   }
   return written;

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "preprocess/initial_state.hpp"
 #include "preprocess/shape.hpp"
 #include "scene/expression.hpp"
 
@@ -15,19 +16,15 @@ namespace fs = std::filesystem;
 
 namespace swmpm::pre {
 
-scene::PointCloud seed_solid(const scene::Scene& s) {
+std::vector<SeedPoint> seed_points(const scene::Scene& s) {
   const int dim = s.dimension;
   const double h = s.grid.cell_size;
   const std::string scene_dir = fs::path(s.source_file).parent_path().string();
 
-  struct Seeded {
-    Point x;
-    int body;
-    double spacing;
-    std::uint32_t faces;
-  };
-  std::vector<std::unique_ptr<Shape>> shapes;
-  for (const auto& b : s.bodies) shapes.push_back(make_shape(b.geometry, dim, scene_dir));
+  using Seeded = SeedPoint;
+  // Built and checked once (files read, named surfaces present); named surfaces get face bits 6..
+  const std::vector<std::unique_ptr<Shape>> shapes = make_shapes(s);
+  const std::vector<std::string> surface_bits = scene::surface_bit_names(s);
 
   std::array<int, 3> cells{1, 1, 1};
   for (int a = 0; a < dim; ++a)
@@ -35,8 +32,7 @@ scene::PointCloud seed_solid(const scene::Scene& s) {
 
   std::vector<Seeded> seeded;
   for (std::size_t b = 0; b < s.bodies.size(); ++b) {
-    const auto& body = s.bodies[b];
-    if (body.solid.empty()) continue;
+    const auto& body = s.bodies[b];  // every body: solid, saturated or free water
     const int n = body.particles_per_cell;
     const double dx = h / n;  // lattice spacing
     const auto box = shapes[b]->bounds();
@@ -67,6 +63,8 @@ scene::PointCloud seed_solid(const scene::Scene& s) {
               y[a] += side == 0 ? -dx : dx;
               if (!inside_grid(y) || !shapes[b]->inside(y)) faces |= 1u << (2 * a + side);
             }
+          // Named surfaces: bit 6 + k when within one lattice spacing of the k-th named surface.
+          faces |= named_surface_bits(surface_bits, *shapes[b], x, dx);
           seeded.push_back({x, static_cast<int>(b), dx, faces});
         }
   }
@@ -77,12 +75,66 @@ scene::PointCloud seed_solid(const scene::Scene& s) {
   for (const auto& p : seeded) {
     bool overwritten = false;
     for (std::size_t later = p.body + 1; later < s.bodies.size() && !overwritten; ++later)
-      overwritten = !s.bodies[later].solid.empty() && shapes[later]->inside(p.x);
+      overwritten = shapes[later]->inside(p.x);
     if (!overwritten) kept.push_back(p);
   }
 
+  return kept;
+}
+
+namespace {
+
+/// Where a formulation keeps the water (docs/architecture.md, "Preprocess in detail").
+struct WaterLayout {
+  bool pore_fluid_on_solid = false;  // single-point: porosity, pore_pressure, fluid_mass, fluid_material on solid.vtu
+  bool fluid_particles = false;      // double-point: fluid.vtu holds the pore fluid and the free water
+  bool free_water_on_grid = false;   // mpm-fem: free water is a grid field, not particles
+};
+
+WaterLayout water_layout(scene::Formulation f) {
+  switch (f) {
+    case scene::Formulation::dry: return {};
+    case scene::Formulation::explicit_single_point:
+    case scene::Formulation::semi_implicit_single_point: return {true, false, false};
+    case scene::Formulation::mpm_fem: return {true, false, true};
+    case scene::Formulation::semi_implicit_double_point:
+    case scene::Formulation::explicit_double_point: return {false, true, false};
+    case scene::Formulation::automatic: break;
+  }
+  throw std::logic_error("preprocess: the formulation was not resolved from \"auto\"");
+}
+
+/// A single-point particle is a skeleton with water in its pores: it cannot be water alone.
+void reject_free_water(const scene::Scene& s, const std::vector<BodyContent>& content, const WaterLayout& w) {
+  if (w.fluid_particles || w.free_water_on_grid) return;
+  for (std::size_t b = 0; b < s.bodies.size(); ++b)
+    if (!content[b].has_solid())
+      throw scene::SceneError({s.source_file + ": /bodies/" + std::to_string(b) + ": body \"" + s.bodies[b].name +
+                               "\" is free water (a fluid without a solid), which \"" + scene::to_string(s.formulation) +
+                               "\" cannot represent (a single-point particle is a skeleton with water in its pores); "
+                               "expected a double-point formulation (\"semi-implicit-double-point\", "
+                               "\"explicit-double-point\") or \"mpm-fem\""});
+}
+
+/// Indices of the points whose body satisfies `keep`.
+template <class Keep>
+std::vector<std::size_t> select(const std::vector<SeedPoint>& points, Keep&& keep) {
+  std::vector<std::size_t> out;
+  for (std::size_t p = 0; p < points.size(); ++p)
+    if (keep(static_cast<std::size_t>(points[p].body))) out.push_back(p);
+  return out;
+}
+
+/// particles/solid.vtu: the points of bodies with a solid. The dry arrays come first (what every
+/// solver reads); mass = (1 - n) rho_s V (or density V); `stress` is the effective stress. A
+/// single-point set adds its pore fluid on the same points, a double-point set the porosity.
+scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint>& points,
+                              const std::vector<BodyContent>& content, const InitialFields& init,
+                              const WaterLayout& w) {
+  const auto sel = select(points, [&](std::size_t b) { return content[b].has_solid(); });
+  const int dim = s.dimension;
   scene::PointCloud c;
-  c.points.resize(kept.size());
+  c.points.resize(sel.size());
   auto& id = c.add("id", 1);
   auto& mass = c.add("mass", 1);
   auto& volume = c.add("volume", 1);
@@ -92,29 +144,107 @@ scene::PointCloud seed_solid(const scene::Scene& s) {
   auto& material = c.add("material", 1);
   auto& body_arr = c.add("body", 1);
   auto& faces = c.add("faces", 1);
-  for (std::size_t p = 0; p < kept.size(); ++p) {
-    const auto& sp = kept[p];
-    const auto& body = s.bodies[sp.body];
-    const auto& mat = s.material(body.solid);
-    c.points[p] = sp.x;
-    id.values[p] = static_cast<double>(p);
+  for (std::size_t k = 0; k < sel.size(); ++k) {
+    const auto& sp = points[sel[k]];
+    const auto& body = s.bodies[static_cast<std::size_t>(sp.body)];
+    c.points[k] = sp.x;
+    id.values[k] = static_cast<double>(k);
     const double V = std::pow(sp.spacing, dim);  // m^3, or m^2 per metre of thickness in 2D
-    double rho = mat.solid_bulk_density();       // kg/m^3 of the skeleton
-    if (body.initial.porosity && mat.has("grain_density")) rho = (1.0 - *body.initial.porosity) * mat.at("grain_density");
-    volume.values[p] = V;
-    mass.values[p] = rho * V;
+    volume.values[k] = V;
+    mass.values[k] = content_of(content, sp).solid_density * V;
     for (int a = 0; a < dim; ++a) {
-      half.values[3 * p + a] = 0.5 * sp.spacing;
-      vel.values[3 * p + a] = scene::evaluate_expression(body.initial.velocity[a], sp.x[0], sp.x[1], sp.x[2]);
+      half.values[3 * k + a] = 0.5 * sp.spacing;
+      vel.values[3 * k + a] = scene::evaluate_expression(body.initial.velocity[a], sp.x[0], sp.x[1], sp.x[2]);
     }
-    if (body.initial.stress)
-      for (int k = 0; k < 6; ++k) stress.values[6 * p + k] = (*body.initial.stress)[k];
-    material.values[p] = s.material_index(body.solid);
-    body_arr.values[p] = sp.body;
-    faces.values[p] = sp.faces;
+    for (std::size_t j = 0; j < 6; ++j) stress.values[6 * k + j] = init.stress[sel[k]][j];
+    material.values[k] = s.material_index(body.solid);
+    body_arr.values[k] = sp.body;
+    faces.values[k] = sp.faces;
+  }
+  if (w.pore_fluid_on_solid || w.fluid_particles) {
+    auto& porosity = c.add("porosity", 1);
+    for (std::size_t k = 0; k < sel.size(); ++k) porosity.values[k] = content_of(content, points[sel[k]]).porosity;
+  }
+  if (w.pore_fluid_on_solid) {
+    // Pore fluid of the same points; a dry body in a coupled scene has none (fluid_material -1).
+    auto& pore_pressure = c.add("pore_pressure", 1);
+    auto& fluid_mass = c.add("fluid_mass", 1);
+    auto& fluid_material = c.add("fluid_material", 1);
+    for (std::size_t k = 0; k < sel.size(); ++k) {
+      const auto& sp = points[sel[k]];
+      const auto& body = s.bodies[static_cast<std::size_t>(sp.body)];
+      pore_pressure.values[k] = init.pore_pressure[sel[k]];
+      fluid_mass.values[k] = content_of(content, sp).fluid_density * volume.values[k];
+      fluid_material.values[k] = body.fluid.empty() ? -1.0 : s.material_index(body.fluid);
+    }
   }
   return c;
 }
+
+/// particles/fluid.vtu (double-point): the points of bodies with a fluid, coincident with the
+/// solid points of saturated bodies. mass = n rho_w V (saturated) or rho_w V (free water, n = 1).
+scene::PointCloud fluid_cloud(const scene::Scene& s, const std::vector<SeedPoint>& points,
+                              const std::vector<BodyContent>& content, const InitialFields& init) {
+  const auto sel = select(points, [&](std::size_t b) { return content[b].has_fluid(); });
+  const int dim = s.dimension;
+  scene::PointCloud c;
+  c.points.resize(sel.size());
+  auto& id = c.add("id", 1);
+  auto& mass = c.add("mass", 1);
+  auto& volume = c.add("volume", 1);
+  auto& half = c.add("half_size", 3);
+  auto& vel = c.add("velocity", 3);
+  auto& pore_pressure = c.add("pore_pressure", 1);
+  auto& porosity = c.add("porosity", 1);
+  auto& material = c.add("material", 1);
+  auto& body_arr = c.add("body", 1);
+  auto& faces = c.add("faces", 1);
+  for (std::size_t k = 0; k < sel.size(); ++k) {
+    const auto& sp = points[sel[k]];
+    const auto& body = s.bodies[static_cast<std::size_t>(sp.body)];
+    const BodyContent& bc = content_of(content, sp);
+    c.points[k] = sp.x;
+    id.values[k] = static_cast<double>(k);
+    const double V = std::pow(sp.spacing, dim);  // m^3, or m^2 per metre of thickness in 2D
+    volume.values[k] = V;
+    mass.values[k] = bc.fluid_density * V;
+    for (int a = 0; a < dim; ++a) {
+      half.values[3 * k + a] = 0.5 * sp.spacing;
+      vel.values[3 * k + a] = scene::evaluate_expression(body.initial.velocity[a], sp.x[0], sp.x[1], sp.x[2]);
+    }
+    pore_pressure.values[k] = init.pore_pressure[sel[k]];
+    porosity.values[k] = bc.porosity;
+    material.values[k] = s.material_index(body.fluid);
+    body_arr.values[k] = sp.body;
+    faces.values[k] = sp.faces;
+  }
+  return c;
+}
+
+}  // namespace
+
+Phases seed_phases(const scene::Scene& s) {
+  const WaterLayout w = water_layout(s.formulation);
+  std::vector<BodyContent> content;
+  for (std::size_t b = 0; b < s.bodies.size(); ++b) content.push_back(body_content(s, b));
+  reject_free_water(s, content, w);
+  // Free water stays in the points even where it is not written (mpm-fem): it still loads the
+  // soil below it and takes its place where bodies overlap.
+  const std::vector<SeedPoint> points = seed_points(s);
+  const InitialFields init = initial_state(s, points, content);
+
+  Phases out;
+  out.solid = solid_cloud(s, points, content, init, w);
+  if (w.fluid_particles) out.fluid = fluid_cloud(s, points, content, init);
+  if (w.free_water_on_grid)
+    for (std::size_t b = 0; b < s.bodies.size(); ++b)
+      if (!content[b].has_solid())
+        out.notes.push_back("body \"" + s.bodies[b].name + "\" is free water: " + scene::to_string(s.formulation) +
+                            " models it on the grid, so no particles are written for it");
+  return out;
+}
+
+scene::PointCloud seed_solid(const scene::Scene& s) { return seed_phases(s).solid; }
 
 namespace {
 
@@ -139,32 +269,32 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
 
 std::string preprocess(const std::string& scene_path, const std::string& out_dir, bool quiet) {
   const scene::Scene s = scene::load_scene(scene_path);
-  if (s.formulation != scene::Formulation::dry)
-    throw std::runtime_error(scene_path + ": /formulation: \"" + scene::to_string(s.formulation) +
-                             "\" is not implemented yet in this version (available: dry)");
   reject_unused_switches(scene_path, s);
-  for (std::size_t b = 0; b < s.bodies.size(); ++b) {
-    const auto& init = s.bodies[b].initial;
-    if (init.stress && !s.bodies[b].solid.empty() && s.material(s.bodies[b].solid).model == scene::MaterialModel::hencky)
-      throw std::runtime_error(scene_path + ": /bodies/" + std::to_string(b) +
-                               "/initial/stress: hencky computes stress from the deformation gradient; an initial "
-                               "stress needs an initial F, which is not implemented yet (use linear-elastic)");
-    if (init.geostatic || init.hydrostatic || init.pore_pressure)
-      throw std::runtime_error(scene_path + ": /bodies/" + std::to_string(b) +
-                               "/initial: geostatic stress and pore pressures are not implemented yet in this version");
-  }
   // Everything is built in memory first, so a failure writes nothing.
-  const scene::PointCloud solid = seed_solid(s);
-  if (solid.size() == 0) throw std::runtime_error(scene_path + ": /bodies: no particle was seeded (are the bodies inside the grid?)");
+  const Phases phases = seed_phases(s);
+  if (phases.solid.size() == 0 && phases.fluid.size() == 0 && phases.notes.empty())
+    throw std::runtime_error(scene_path + ": /bodies: no particle was seeded (are the bodies inside the grid?)");
 
   const fs::path dir = out_dir.empty() ? fs::path("runs") / s.name : fs::path(out_dir);
   fs::create_directories(dir / "particles");
   std::ofstream(dir / "scene.json") << scene::to_json(s).dump(2) << "\n";
-  scene::write_vtu((dir / "particles" / "solid.vtu").string(), solid);
   if (!quiet) std::cout << "preprocess: formulation " << scene::to_string(s.formulation) << " (" << s.formulation_reason << ")\n";
+  const bool pore_fluid_on_solid = phases.solid.find("pore_pressure") != nullptr;
+  for (const auto& [phase, cloud] : {std::pair{"solid", &phases.solid}, std::pair{"fluid", &phases.fluid}}) {
+    const fs::path file = dir / "particles" / (std::string(phase) + ".vtu");
+    if (cloud->size() == 0) {
+      fs::remove(file);  // an earlier run's file would be read as this scene's particles
+      continue;
+    }
+    scene::write_vtu(file.string(), *cloud);
+    if (!quiet)
+      std::cout << "preprocess: " << cloud->size() << " " << phase << " particles"
+                << (phase == std::string("solid") && pore_fluid_on_solid ? " (with their pore fluid)" : "") << " -> "
+                << file.string() << "\n";
+  }
   if (!quiet)
-    std::cout << "preprocess: " << solid.size() << " solid particles -> " << (dir / "particles" / "solid.vtu").string()
-              << std::endl;
+    for (const auto& note : phases.notes) std::cout << "preprocess: " << note << "\n";
+  if (!quiet) std::cout << std::flush;
   return dir.string();
 }
 

@@ -1,14 +1,42 @@
-// Stage 1: geometry -> particles. Seeds n^dim particles per cell on a lattice inside each body,
-// resolves overlaps by body order (later bodies win), tags face particles for loads, sets the
-// initial state, and writes RUN_DIR/{scene.json, particles/solid.vtu}.
+// Stage 1: geometry -> particles. Seeds n^dim lattice points per cell inside each body, resolves
+// overlaps by body order (later bodies win), tags face particles for loads, sets the initial state
+// (preprocess/initial_state.hpp), and writes RUN_DIR/scene.json and one particles/<phase>.vtu per
+// phase the formulation needs (docs/architecture.md, "Preprocess in detail").
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
+#include "preprocess/shape.hpp"
 #include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 
 namespace swmpm::pre {
+
+/// One lattice point of a body, kept after overlap resolution.
+struct SeedPoint {
+  Point x;              // m
+  int body;             // index into scene.bodies
+  double spacing;       // m, lattice spacing h / particles_per_cell: the particle's width per axis
+  std::uint32_t faces;  // bit f: the lattice neighbour across face f is outside the body or the grid
+};
+
+/// The lattice points of every body (solid, saturated and free water), in body order, with
+/// overlaps resolved (a point inside a later body's geometry belongs to that body).
+std::vector<SeedPoint> seed_points(const scene::Scene& s);
+
+/// The particle sets of a scene, as written to particles/<phase>.vtu. An empty set is not written.
+struct Phases {
+  scene::PointCloud solid;  // skeleton particles (single-point sets also carry the pore fluid)
+  scene::PointCloud fluid;  // double-point pore fluid and free water
+  std::vector<std::string> notes;  // what was left out on purpose and why, for the log
+};
+
+/// Seeds every phase the scene's formulation needs and sets the initial state. Throws
+/// scene::SceneError (one line naming the file and JSON path) for a scene the formulation cannot
+/// represent or an initial state that cannot be built.
+Phases seed_phases(const scene::Scene& s);
 
 /// The solid particles of a scene (all bodies with a solid material), as written to solid.vtu.
 scene::PointCloud seed_solid(const scene::Scene& s);

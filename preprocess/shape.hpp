@@ -1,10 +1,13 @@
 // Geometry behind one interface: an inside test, bounds, and named surfaces. Seeding, face tagging
-// and (next) initial states only talk to Shape, so gmsh volumes, CGAL surface meshes and the
-// parametric slope and footing plug in as further implementations.
+// and initial states only talk to Shape; box and polygon (shapes_basic.cpp), slope and footing
+// (shape_parametric.cpp), gmsh meshes (shape_gmsh.cpp) and CGAL surface meshes
+// (shape_surface_mesh.cpp) are its implementations.
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -21,13 +24,43 @@ class Shape {
   virtual bool inside(const Point& x) const = 0;
   /// Axis-aligned bounds [lo, hi] (unused components 0 in 2D).
   virtual std::array<Point, 2> bounds() const = 0;
-  /// Named surfaces besides the six axis faces (e.g. gmsh physical groups); none for box/polygon.
+  /// Named surfaces besides the six axis faces: slope and footing surfaces, gmsh physical groups
+  /// of dimension dim - 1. None for box, polygon and surface meshes.
   virtual std::vector<std::string> surface_names() const { return {}; }
-  /// Whether x lies within `tol` of the named surface.
+  /// Whether x lies within `tol` of the named surface, measured perpendicular to it (the foot of
+  /// the perpendicular on the surface, not past its ends); false for a name the shape lacks.
   virtual bool on_surface(const std::string& /*name*/, const Point& /*x*/, double /*tol*/) const { return false; }
+  /// Unit normal of the named surface at the point nearest to x (within `tol`, as on_surface),
+  /// pointing out of the body: the direction a `pressure` load on that surface pushes against.
+  /// Zero when x is not within `tol` of the surface.
+  virtual Point outward_normal(const std::string& /*name*/, const Point& /*x*/, double /*tol*/) const {
+    return {0.0, 0.0, 0.0};
+  }
 };
 
-/// Builds the shape of a body's geometry; `scene_dir` resolves relative file paths.
+/// A geometry that cannot be built from its file or keys. `key` is the geometry key at fault
+/// ("file", "physical", "parameters/<name>"); make_shapes turns it into a scene error line.
+class GeometryError : public std::runtime_error {
+ public:
+  GeometryError(std::string key, const std::string& what) : std::runtime_error(what), key_(std::move(key)) {}
+  const std::string& key() const { return key_; }
+
+ private:
+  std::string key_;
+};
+
+/// Builds the shape of a body's geometry (throws GeometryError). File paths in `g` are absolute
+/// (the parser resolved them); `scene_dir` is kept for callers that build geometries by hand.
 std::unique_ptr<Shape> make_shape(const scene::Geometry& g, int dimension, const std::string& scene_dir);
+
+/// Every body's shape, checked against the scene where only the files can tell: bounds from a
+/// file inside the grid, named surfaces that loads and boundaries refer to present. Throws
+/// scene::SceneError with one line per problem, "<scene>: /bodies/N/geometry/...: ...".
+std::vector<std::unique_ptr<Shape>> make_shapes(const scene::Scene& s);
+
+/// Face bits of the named surfaces within `tol` of x: bit scene::kFirstSurfaceBit + k for the
+/// k-th of `bit_names` (scene::surface_bit_names of the scene) when `shape` has that surface.
+std::uint32_t named_surface_bits(const std::vector<std::string>& bit_names, const Shape& shape, const Point& x,
+                                 double tol);
 
 }  // namespace swmpm::pre

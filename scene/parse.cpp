@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -88,11 +89,7 @@ const std::vector<std::string>& face_names() {
   return v;
 }
 const std::vector<std::string>& geometry_types() {
-  static const std::vector<std::string> v{"box", "polygon", "slope", "gmsh", "surface-mesh"};
-  return v;
-}
-const std::vector<std::string>& implemented_geometry_types() {
-  static const std::vector<std::string> v{"box", "polygon"};
+  static const std::vector<std::string> v{"box", "polygon", "slope", "gmsh", "surface-mesh", "footing"};
   return v;
 }
 // Quantities of one followed particle (monitor with `at` or `particle`).
@@ -500,6 +497,74 @@ bool check_vertices(Ctx& c, const json& v, const std::string& path, const Key& k
   return true;
 }
 
+/// A geometry file path as written, resolved against the folder of the scene file `label`.
+std::filesystem::path resolve_file(const std::string& label, const std::string& file) {
+  namespace fs = std::filesystem;
+  fs::path p(file);
+  if (p.is_relative()) p = fs::path(label).parent_path() / p;
+  std::error_code ec;
+  const fs::path abs = fs::absolute(p, ec);
+  return (ec ? p : abs).lexically_normal();
+}
+
+/// " (did you mean "x"?)" naming a file in the folder of `missing` with one of `extensions`.
+std::string did_you_mean_file(const std::filesystem::path& missing, const std::vector<std::string>& extensions) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (fs::directory_iterator it(missing.parent_path(), ec), end; !ec && it != end; it.increment(ec)) {
+    if (contains(extensions, lower(it->path().extension().string()))) names.push_back(it->path().filename().string());
+  }
+  return did_you_mean(missing.filename().string(), names);
+}
+
+/// A path, relative to the scene file's folder, to an existing file with one of the extensions
+/// in `k.values`.
+bool check_file(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (!v.is_string() || v.get_ref<const std::string&>().empty()) {
+    report(c, v, path, k);
+    return false;
+  }
+  const std::string file = v.get<std::string>();
+  if (!contains(k.values, lower(std::filesystem::path(file).extension().string()))) {
+    c.error(path, "got " + shown(v) + " (extension not recognised), expected " + expected(k, c));
+    return false;
+  }
+  const std::filesystem::path full = resolve_file(c.label, file);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(full, ec)) {
+    c.error(path, "got " + shown(v) + ", no such file (" + full.string() + "), expected " + expected(k, c) +
+                      " relative to the scene file's folder" + did_you_mean_file(full, k.values));
+    return false;
+  }
+  return true;
+}
+
+/// gmsh parameters: {"name": number}, names usable as .geo variables (they are written into a .geo
+/// prelude, so nothing else may get through).
+bool check_parameters(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (!v.is_object()) {
+    report(c, v, path, k);
+    return false;
+  }
+  bool ok = true;
+  for (const auto& [name, value] : v.items()) {
+    const bool identifier = !name.empty() && !std::isdigit(static_cast<unsigned char>(name[0])) &&
+                            std::all_of(name.begin(), name.end(), [](char ch) {
+                              return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_';
+                            });
+    if (!identifier) {
+      c.error(path + "/" + escape(name), "got parameter name " + in_quotes(name) +
+                                             ", expected a gmsh variable name (letters, digits, '_')");
+      ok = false;
+    } else if (!value.is_number() || !std::isfinite(value.get<double>())) {
+      c.error(path + "/" + escape(name), "got " + shown(value) + ", expected a number");
+      ok = false;
+    }
+  }
+  return ok;
+}
+
 // -- the tables -----------------------------------------------------------------------------------
 // Keys are written with designated initializers; fields left out keep their defaults on purpose.
 // GCC before 14 warns about that under -Wextra, hence the pragma around the tables only.
@@ -692,7 +757,7 @@ const Table& geometry_table() {
       "Geometry (every type)", "`bodies[].geometry`",
       {
           {.name = "type", .type = Type::choice, .required = true, .values = geometry_types(),
-           .meaning = "Kind of geometry; `slope`, `gmsh`, `surface-mesh` are not implemented yet."},
+           .meaning = "Kind of geometry; its keys are in the table of that type below."},
       }};
   return t;
 }
@@ -717,6 +782,82 @@ const Table& polygon_table() {
            .meaning = "Corners in order (either orientation); non-zero area, inside the grid.",
            .type_text = "array of [x, y]", .expect = "an array of at least 3 [x, y] pairs",
            .allowed = "≥ 3 vertices", .check = check_vertices},
+      }};
+  return t;
+}
+
+const Table& slope_table() {
+  static const Table t{
+      "Slope (`slope`, 2D only)", "`bodies[].geometry`",
+      {
+          {.name = "foundation_depth", .required = true, .range = positive, .unit = "m",
+           .meaning = "Thickness of the foundation layer, from its base up to the toe."},
+          {.name = "height", .required = true, .range = positive, .unit = "m",
+           .meaning = "Height of the slope, from the toe up to the crest."},
+          {.name = "angle", .range = open(0, 90), .unit = "deg",
+           .meaning = "Inclination of the slope face from the horizontal (or `ratio`, exactly one)."},
+          {.name = "ratio", .range = positive, .unit = "-",
+           .meaning = "Slope face gradient horizontal : vertical, e.g. 2 for 1V:2H (or `angle`)."},
+          {.name = "crest_length", .required = true, .range = positive, .unit = "m",
+           .meaning = "Horizontal length of the crest, from the top of the face to the right side."},
+          {.name = "toe_length", .required = true, .range = positive, .unit = "m",
+           .meaning = "Horizontal length of the ground in front of the toe, from the left side."},
+          {.name = "origin", .type = Type::vector, .unit = "m",
+           .meaning = "Lower-left corner of the foundation.", .default_text = "grid `min`"},
+      }};
+  return t;
+}
+
+const Table& footing_table() {
+  static const Table t{
+      "Footing (`footing`)", "`bodies[].geometry`",
+      {
+          {.name = "width", .required = true, .range = positive, .unit = "m",
+           .meaning = "Extent along x."},
+          {.name = "height", .required = true, .range = positive, .unit = "m",
+           .meaning = "Extent along y (the block's thickness)."},
+          {.name = "center_x", .required = true, .range = any_number, .unit = "m",
+           .meaning = "x of the block's centre."},
+          {.name = "center_z", .range = any_number, .unit = "m",
+           .meaning = "z of the block's centre; required in 3D, only there."},
+          {.name = "length", .range = positive, .unit = "m",
+           .meaning = "Extent along z; required in 3D, only there."},
+          {.name = "on", .type = Type::string,
+           .meaning = "Name of the body the block rests on: its base is that body's top (highest point); "
+                      "or give `base_y`."},
+          {.name = "base_y", .range = any_number, .unit = "m",
+           .meaning = "Height of the block's base (instead of `on`)."},
+      }};
+  return t;
+}
+
+const Table& gmsh_table() {
+  static const Table t{
+      "Gmsh (`gmsh`)", "`bodies[].geometry`",
+      {
+          {.name = "file", .type = Type::custom, .required = true, .values = {".geo", ".msh"},
+           .meaning = "Gmsh file, relative to the scene file's folder; a `.geo` is meshed when preprocess reads it.",
+           .type_text = "string", .expect = "a path to an existing .geo or .msh file",
+           .allowed = "`.geo`, `.msh`", .check = check_file},
+          {.name = "parameters", .type = Type::custom, .def = json::object(), .unit = "as in the file",
+           .meaning = "Values for the `.geo` file's `DefineConstant` variables, by name (not with `.msh`).",
+           .type_text = "object of numbers", .expect = "an object of numbers keyed by DefineConstant names",
+           .allowed = "`DefineConstant` names", .default_text = "none", .check = check_parameters},
+          {.name = "physical", .type = Type::string,
+           .meaning = "Physical group forming the body: a surface group (2D) or volume group (3D); "
+                      "default: every surface (2D) / volume (3D) of the file."},
+      }};
+  return t;
+}
+
+const Table& surface_mesh_table() {
+  static const Table t{
+      "Surface mesh (`surface-mesh`, 3D only)", "`bodies[].geometry`",
+      {
+          {.name = "file", .type = Type::custom, .required = true, .values = {".off", ".stl", ".obj"},
+           .meaning = "Closed, not self-intersecting surface mesh, relative to the scene file's folder.",
+           .type_text = "string", .expect = "a path to an existing .off, .stl or .obj file",
+           .allowed = "`.off`, `.stl`, `.obj`", .check = check_file},
       }};
   return t;
 }
@@ -752,8 +893,10 @@ const Table& boundary_table() {
   static const Table t{
       "Boundary", "`boundaries[]`",
       {
-          {.name = "on", .type = Type::choice, .required = true, .values = face_names(),
-           .meaning = "Grid face (`z_min`, `z_max` only in 3D); each face at most once."},
+          {.name = "on", .type = Type::string, .required = true,
+           .meaning = "Grid face (`z_min`, `z_max` only in 3D), or a geometry's named surface (checked and "
+                      "stored; the solver applies grid faces only); each at most once.",
+           .allowed = "`x_min`, `x_max`, `y_min`, `y_max`, `z_min`, `z_max`, or a named surface"},
           {.name = "solid", .type = Type::choice, .def = "free", .values = solid_bc_names(),
            .meaning = "Solid velocity condition: fixed (all components), roller (normal), free, friction."},
           {.name = "coefficient", .range = non_negative, .unit = "-",
@@ -774,8 +917,10 @@ const Table& load_table() {
            .meaning = "A traction vector, or a pressure normal to the face."},
           {.name = "body", .type = Type::string, .required = true,
            .meaning = "Name of the loaded body."},
-          {.name = "face", .type = Type::choice, .required = true, .values = face_names(),
-           .meaning = "The body's surface layer facing that way (`z_*` only in 3D)."},
+          {.name = "face", .type = Type::string, .required = true,
+           .meaning = "The body's surface layer facing that way (`z_*` only in 3D), or along one of its "
+                      "named surfaces.",
+           .allowed = "`x_min`, `x_max`, `y_min`, `y_max`, `z_min`, `z_max`, or a named surface"},
           {.name = "value", .type = Type::custom, .required = true, .unit = "Pa",
            .meaning = "traction: a `dimension`-vector; pressure: a number, positive pushing onto the face.",
            .type_text = "vector or number", .expect = "a vector of one number per dimension (traction) or a number (pressure)",
@@ -896,6 +1041,7 @@ std::vector<const Table*> all_tables() {
   return {&scene_table(),     &grid_table(),     &material_table(),  &solid_table(),
           &elastic_table(),   &strength_table(), &nor_sand_table(),  &fluid_table(),
           &body_table(),      &geometry_table(), &box_table(),       &polygon_table(),
+          &slope_table(),     &footing_table(),  &gmsh_table(),      &surface_mesh_table(),
           &initial_table(),   &boundary_table(), &load_table(),      &region_table(),
           &time_table(),      &output_table(),   &monitor_table(),   &solver_table(),
           &stabilisation_table()};
@@ -1117,6 +1263,13 @@ class SceneParser {
   Vec3 grid_min_{0, 0, 0}, grid_max_{0, 0, 0};  // as written (before rounding up) [m]
   std::vector<MaterialInfo> material_info_;
   std::vector<std::string> body_paths_;
+  std::vector<std::optional<Bounds>> body_bounds_;  // per body, when known before preprocess
+  struct PendingFooting {
+    std::size_t body;
+    std::string on, path;  // the body it rests on; the footing's geometry path
+  };
+  std::vector<PendingFooting> pending_footings_;  // footings with `on`, resolved after all bodies
+  std::vector<std::string> surface_names_;        // named surfaces referred to (face bits 6..)
 
   int dim() const { return s_.dimension; }
 
@@ -1126,11 +1279,37 @@ class SceneParser {
     return f;
   }
 
-  bool check_face(const std::string& face, const std::string& path) {
+  /// An axis face of this dimension, or a named surface among `named` (the surfaces known now).
+  /// With `deferred` (a gmsh geometry, whose names preprocess reads from its file) any other
+  /// name passes here and is checked there. `none` says whose surfaces are missing.
+  bool check_face(const std::string& face, const std::string& path, const std::vector<std::string>& named,
+                  bool deferred, const std::string& none) {
     if (contains(faces(), face)) return true;
-    c_.error(path, "got " + in_quotes(face) + ", expected one of: " + join(faces()) +
-                       " (z faces exist only in 3D scenes)");
-    return false;
+    if (contains(face_names(), face)) {
+      c_.error(path, "got " + in_quotes(face) + ", expected one of: " + join(faces()) +
+                         " (z faces exist only in 3D scenes)");
+      return false;
+    }
+    if (!contains(named, face) && !deferred) {
+      std::vector<std::string> all = faces();
+      all.insert(all.end(), named.begin(), named.end());
+      c_.error(path, "got " + in_quotes(face) + ", expected one of: " + join(faces()) +
+                         (named.empty() ? " (" + none + ")" : ", or a named surface: " + join(named)) +
+                         did_you_mean(face, all));
+      return false;
+    }
+    // A named surface gets a face bit; there are 26 of them.
+    if (!contains(surface_names_, face)) {
+      if (surface_names_.size() == static_cast<std::size_t>(kMaxNamedSurfaces)) {
+        c_.error(path, "got " + in_quotes(face) + ", a named surface beyond the " +
+                           std::to_string(kMaxNamedSurfaces) + " a scene may refer to (face bits " +
+                           std::to_string(kFirstSurfaceBit) + "..31), expected one already used: " +
+                           join(surface_names_));
+        return false;
+      }
+      surface_names_.push_back(face);
+    }
+    return true;
   }
 
   /// `max` > `min` in every component; reports at `max_path`.
@@ -1302,11 +1481,12 @@ class SceneParser {
       check_material_ref(o, "fluid", true);
       if (solid >= 0 && !b.fluid.empty()) check_saturated_solid(static_cast<std::size_t>(solid), b, p);
 
+      std::optional<Bounds> bounds;
       if (o.ok("geometry")) {
-        if (const auto bounds = parse_geometry(o.get("geometry"), o.at("geometry"), b.geometry)) {
-          check_inside_grid(*bounds, o.at("geometry"));
-        }
+        bounds = parse_geometry(o.get("geometry"), o.at("geometry"), b.geometry);
+        if (bounds) check_inside_grid(*bounds, o.at("geometry"));
       }
+      body_bounds_.push_back(bounds);
       parse_initial(o.ok("initial") ? o.get("initial") : json::object(), o.at("initial"), b);
 
       if (!b.name.empty()) {
@@ -1320,6 +1500,7 @@ class SceneParser {
       s_.bodies.push_back(b);
       body_paths_.push_back(p);
     }
+    resolve_footings();
   }
 
   /// The solid of a saturated body is a porous skeleton with a permeability. Reported once per
@@ -1340,32 +1521,70 @@ class SceneParser {
     }
   }
 
+  /// Why `type` cannot be used in this scene's dimension ("" when it can).
+  std::string dimension_problem(const std::string& type) const {
+    if (dim() == 3 && type == "polygon") return "got \"polygon\" in a 3D scene, expected \"box\" (polygon is 2D only)";
+    if (dim() == 3 && type == "slope")
+      return "got \"slope\" in a 3D scene, expected a 3D geometry (box, footing, gmsh, surface-mesh); slope is 2D only";
+    if (dim() == 2 && type == "surface-mesh")
+      return "got \"surface-mesh\" in a 2D scene, expected a 2D geometry (box, polygon, slope, footing, gmsh); "
+             "surface-mesh is 3D only";
+    return {};
+  }
+
+  static const Table* type_table(const std::string& type) {
+    if (type == "box") return &box_table();
+    if (type == "polygon") return &polygon_table();
+    if (type == "slope") return &slope_table();
+    if (type == "footing") return &footing_table();
+    if (type == "gmsh") return &gmsh_table();
+    if (type == "surface-mesh") return &surface_mesh_table();
+    return nullptr;
+  }
+
+  /// The geometry's typed values and, when they are known before preprocess, its bounds.
   std::optional<Bounds> parse_geometry(const json& j, const std::string& path, Geometry& g) {
     g.raw = j;
     const std::string type = j.contains("type") && j["type"].is_string() ? j["type"].get<std::string>() : "";
-    const bool implemented = contains(implemented_geometry_types(), type);
-    const bool usable = implemented && !(type == "polygon" && dim() == 3);
+    const Table* table = type_table(type);
+    const std::string problem = table ? dimension_problem(type) : "";
+    const bool usable = table && problem.empty();
     std::vector<const Table*> tables{&geometry_table()};
-    if (usable) tables.push_back(type == "box" ? &box_table() : &polygon_table());
+    if (usable) tables.push_back(table);
     const Obj o = check_object(c_, j, path, tables, usable);
     g.type = o.str("type");
     if (!o.ok("type")) return std::nullopt;
-    if (!implemented) {
-      c_.error(o.at("type"), in_quotes(type) + " is not implemented yet in this version (available: " +
-                                 join(implemented_geometry_types()) + ")");
-      return std::nullopt;
-    }
     if (!usable) {
-      c_.error(o.at("type"), "got \"polygon\" in a 3D scene, expected \"box\" (polygon is 2D only)");
+      c_.error(o.at("type"), problem);
       return std::nullopt;
     }
-    if (type == "box") {
-      g.min = o.vec("min");
-      g.max = o.vec("max");
-      if (!o.ok("min") || !o.ok("max") || !check_min_max(g.min, g.max, o.at("max"))) return std::nullopt;
-      return Bounds{g.min, g.max};
+    if (type == "box") return parse_box(o, g);
+    if (type == "polygon") return parse_polygon(o, g);
+    if (type == "slope") return parse_slope(o, g);
+    if (type == "footing") return parse_footing(o, g);
+    // gmsh, surface-mesh: the bounds come from the file (preprocess checks them against the grid).
+    if (o.ok("file")) g.file = resolve_file(c_.label, o.str("file")).string();
+    if (type == "gmsh") {
+      if (o.ok("parameters")) {
+        for (const auto& [name, value] : o.get("parameters").items()) g.parameters[name] = value.get<double>();
+      }
+      g.physical = o.str("physical");
+      if (!g.parameters.empty() && lower(std::filesystem::path(g.file).extension().string()) == ".msh") {
+        c_.error(o.at("parameters"), "got parameters for a .msh file, expected none (only a .geo file has "
+                                     "DefineConstant parameters; a .msh is a finished mesh)");
+      }
     }
-    // polygon
+    return std::nullopt;
+  }
+
+  std::optional<Bounds> parse_box(const Obj& o, Geometry& g) {
+    g.min = o.vec("min");
+    g.max = o.vec("max");
+    if (!o.ok("min") || !o.ok("max") || !check_min_max(g.min, g.max, o.at("max"))) return std::nullopt;
+    return Bounds{g.min, g.max};
+  }
+
+  std::optional<Bounds> parse_polygon(const Obj& o, Geometry& g) {
     if (!o.ok("vertices")) return std::nullopt;
     Bounds b{{inf, inf, 0}, {-inf, -inf, 0}};
     double twice_area = 0.0;
@@ -1387,6 +1606,125 @@ class SceneParser {
       return std::nullopt;
     }
     return b;
+  }
+
+  /// Exactly one of two keys: reports at `b` when both are given, at `a` when neither is.
+  bool one_of(const Obj& o, const std::string& a, const std::string& b, const std::string& what) {
+    if (o.has(a) && o.has(b)) {
+      c_.error(o.at(b), "got both " + in_quotes(a) + " and " + in_quotes(b) + ", expected one of them");
+      return false;
+    }
+    if (!o.has(a) && !o.has(b)) {
+      c_.error(o.at(a), "missing, expected " + what);
+      return false;
+    }
+    return o.ok(a) || o.ok(b);
+  }
+
+  std::optional<Bounds> parse_slope(const Obj& o, Geometry& g) {
+    g.foundation_depth = o.num("foundation_depth");
+    g.height = o.num("height");
+    g.angle = o.num("angle");
+    g.ratio = o.num("ratio");
+    g.crest_length = o.num("crest_length");
+    g.toe_length = o.num("toe_length");
+    const Vec3 origin = o.ok("origin") ? o.vec("origin") : grid_min_;
+    g.origin = {origin[0], origin[1]};
+    const bool inclination = one_of(o, "angle", "ratio",
+                                    "\"angle\" (degrees from the horizontal) or \"ratio\" (horizontal : vertical)");
+    for (const char* k : {"foundation_depth", "height", "crest_length", "toe_length"}) {
+      if (!o.ok(k)) return std::nullopt;
+    }
+    if (!inclination) return std::nullopt;
+    const double run = g.ratio > 0.0 ? g.height * g.ratio : g.height / std::tan(g.angle * std::numbers::pi / 180.0);
+    const double length = g.toe_length + run + g.crest_length;
+    return Bounds{{g.origin[0], g.origin[1], 0.0},
+                  {g.origin[0] + length, g.origin[1] + g.foundation_depth + g.height, 0.0}};
+  }
+
+  std::optional<Bounds> parse_footing(const Obj& o, Geometry& g) {
+    g.width = o.num("width");
+    g.height = o.num("height");
+    g.center_x = o.num("center_x");
+    g.center_z = o.num("center_z");
+    g.length = o.num("length");
+    g.base_y = o.num("base_y");
+    bool ok = o.ok("width") && o.ok("height") && o.ok("center_x");
+    for (const char* k : {"center_z", "length"}) {
+      if (dim() == 3 && !o.has(k)) {
+        c_.error(o.at(k), std::string("missing, expected a number for a footing in 3D [m]"));
+        ok = false;
+      } else if (dim() == 2 && o.has(k)) {
+        c_.error(o.at(k), std::string("got \"") + k + "\" in a 2D scene, expected none (the block spans x and y)");
+        ok = false;
+      }
+      ok = ok && (dim() == 2 || o.ok(k));
+    }
+    if (!one_of(o, "on", "base_y", "\"on\" (the body the footing rests on) or \"base_y\" [m]")) return std::nullopt;
+    if (o.ok("on")) {
+      // Resolved once every body is known: the body below may come later in the list.
+      if (ok) pending_footings_.push_back({s_.bodies.size(), o.str("on"), o.path});
+      return std::nullopt;
+    }
+    if (!ok) return std::nullopt;
+    return footing_bounds(g);
+  }
+
+  Bounds footing_bounds(const Geometry& g) const {
+    return {{g.center_x - g.width / 2, g.base_y, g.center_z - g.length / 2},
+            {g.center_x + g.width / 2, g.base_y + g.height, g.center_z + g.length / 2}};
+  }
+
+  /// Footings that rest `on` another body stand on its top (the highest point of its bounds). A
+  /// footing may rest on a footing; the passes stop when no more can be placed (cycles).
+  void resolve_footings() {
+    std::vector<std::string> names;
+    for (const Body& b : s_.bodies) names.push_back(b.name);
+    std::vector<PendingFooting> left = pending_footings_;
+    for (bool progress = true; progress && !left.empty();) {
+      progress = false;
+      std::vector<PendingFooting> still;
+      for (const PendingFooting& f : left) {
+        const auto it = std::find(names.begin(), names.end(), f.on);
+        const std::string on_path = f.path + "/on";
+        if (it == names.end() || static_cast<std::size_t>(it - names.begin()) == f.body) {
+          std::vector<std::string> others = names;
+          others.erase(others.begin() + static_cast<std::ptrdiff_t>(f.body));
+          c_.error(on_path, "got " + in_quotes(f.on) + ", expected the name of another body (defined: " +
+                                (others.empty() ? std::string("none") : join(others)) + ")" +
+                                did_you_mean(f.on, others));
+          continue;
+        }
+        const auto below = static_cast<std::size_t>(it - names.begin());
+        const std::string& type = s_.bodies[below].geometry.type;
+        if (type == "gmsh" || type == "surface-mesh") {
+          c_.error(on_path, "got " + in_quotes(f.on) + ", a " + type + " geometry whose top is known only when "
+                            "preprocess reads its file; expected a box, polygon, slope or footing body, or "
+                            "\"base_y\" instead of \"on\"");
+          continue;
+        }
+        if (!body_bounds_[below]) {
+          still.push_back(f);  // not placed (yet), or invalid: reported at its own path
+          continue;
+        }
+        Geometry& g = s_.bodies[f.body].geometry;
+        g.base_y = body_bounds_[below]->max[1];
+        body_bounds_[f.body] = footing_bounds(g);
+        check_inside_grid(*body_bounds_[f.body], f.path);
+        progress = true;
+      }
+      left = still;
+    }
+    // What is left waits, directly or not, for a footing that is also left: a cycle. (A footing on
+    // an invalid body is not in `left` when that body is not; its body's problem is reported.)
+    for (const PendingFooting& f : left) {
+      const bool on_waiting = std::any_of(left.begin(), left.end(), [&](const PendingFooting& g) {
+        return s_.bodies[g.body].name == f.on;
+      });
+      if (!on_waiting) continue;
+      c_.error(f.path + "/on", "got " + in_quotes(f.on) + ", but footings resting on each other form a cycle; "
+                               "expected \"base_y\" for one of them");
+    }
   }
 
   void check_inside_grid(const Bounds& b, const std::string& path) {
@@ -1446,13 +1784,39 @@ class SceneParser {
 
   // -- boundaries and loads --------------------------------------------------------------------
 
+  /// A boundary's `on`: an axis face, or a named surface of any body's geometry.
+  bool check_boundary_on(const std::string& on, const std::string& path) {
+    std::vector<std::string> named;
+    bool deferred = false;
+    for (const Body& b : s_.bodies) {
+      for (const auto& n : named_surfaces(b.geometry, dim())) {
+        if (!contains(named, n)) named.push_back(n);
+      }
+      deferred = deferred || b.geometry.type == "gmsh";
+    }
+    return check_face(on, path, named, deferred, "no body's geometry has named surfaces");
+  }
+
+  /// A load's `face`: an axis face, or a named surface of the loaded body's geometry.
+  void check_load_face(const Load& l, const std::string& path) {
+    const auto body = std::find_if(s_.bodies.begin(), s_.bodies.end(), [&](const Body& b) { return b.name == l.body; });
+    if (body == s_.bodies.end()) {
+      if (!contains(faces(), l.face)) check_face(l.face, path, {}, true, "");  // the body is reported
+      return;
+    }
+    const Geometry& g = body->geometry;
+    check_face(l.face, path, named_surfaces(g, dim()), g.type == "gmsh",
+               "body " + in_quotes(body->name) + " (" + (g.type.empty() ? "no geometry" : g.type) +
+                   ") has no named surfaces");
+  }
+
   void parse_boundaries(const json& arr, const std::string& path) {
     std::map<std::string, std::string> first;
     for (std::size_t i = 0; i < arr.size(); ++i) {
       const Obj o = check_object(c_, arr[i], item(path, i), {&boundary_table()});
       Boundary bc;
       bc.on = o.str("on");
-      if (o.ok("on") && check_face(bc.on, o.at("on"))) {
+      if (o.ok("on") && check_boundary_on(bc.on, o.at("on"))) {
         if (first.count(bc.on) != 0) {
           c_.error(o.at("on"), "got " + in_quotes(bc.on) + " again (also " + first[bc.on] +
                                    "), expected each face at most once");
@@ -1508,7 +1872,7 @@ class SceneParser {
                                    (bodies.empty() ? std::string("none") : join(bodies)) + ")" +
                                    did_you_mean(l.body, bodies));
       }
-      if (o.ok("face")) check_face(l.face, o.at("face"));
+      if (o.ok("face")) check_load_face(l, o.at("face"));
       if (o.ok("value") && o.ok("type")) {
         const json& v = o.get("value");
         if (l.type == "traction" && !v.is_array()) {
@@ -1683,6 +2047,36 @@ json vec_json(const Vec3& v, int dim) {
   return a;
 }
 
+/// The resolved geometry of the types beyond box and polygon: defaults written out (slope
+/// `origin`), footing `on` resolved to `base_y`, file paths absolute.
+json geometry_json(const Geometry& g, int dim) {
+  if (g.type == "slope") {
+    json j = {{"type", "slope"},          {"foundation_depth", g.foundation_depth}, {"height", g.height},
+              {"crest_length", g.crest_length}, {"toe_length", g.toe_length},
+              {"origin", {g.origin[0], g.origin[1]}}};
+    if (g.ratio > 0.0) j["ratio"] = g.ratio;
+    else j["angle"] = g.angle;
+    return j;
+  }
+  if (g.type == "footing") {
+    json j = {{"type", "footing"}, {"width", g.width}, {"height", g.height}, {"center_x", g.center_x},
+              {"base_y", g.base_y}};
+    if (dim == 3) {
+      j["center_z"] = g.center_z;
+      j["length"] = g.length;
+    }
+    return j;
+  }
+  if (g.type == "gmsh") {
+    json j = {{"type", "gmsh"}, {"file", g.file}, {"parameters", json::object()}};
+    for (const auto& [name, value] : g.parameters) j["parameters"][name] = value;
+    if (!g.physical.empty()) j["physical"] = g.physical;
+    return j;
+  }
+  if (g.type == "surface-mesh") return {{"type", "surface-mesh"}, {"file", g.file}};
+  return g.raw;
+}
+
 std::string markdown_default(const Key& k) {
   if (k.required) return "required";
   if (!k.default_text.empty()) return k.default_text;
@@ -1853,7 +2247,7 @@ nlohmann::json to_json(const Scene& s) {
       for (const auto& v : g.vertices) vs.push_back({v[0], v[1]});
       bj["geometry"] = {{"type", "polygon"}, {"vertices", vs}};
     } else {
-      bj["geometry"] = g.raw;
+      bj["geometry"] = geometry_json(g, dim);
     }
     if (!b.solid.empty()) bj["solid"] = b.solid;
     if (!b.fluid.empty()) bj["fluid"] = b.fluid;
@@ -1920,6 +2314,25 @@ nlohmann::json to_json(const Scene& s) {
                    {"pressure", sv.stabilisation.pressure},
                    {"fbar", sv.stabilisation.fbar}}}};
   return j;
+}
+
+std::vector<std::string> named_surfaces(const Geometry& g, int dimension) {
+  if (g.type == "slope") return {"surface", "base", "left", "right", "toe", "slope_face", "crest"};
+  if (g.type == "footing") {
+    if (dimension == 3) return {"bottom", "top", "left", "right", "back", "front"};
+    return {"bottom", "top", "left", "right"};
+  }
+  return {};
+}
+
+std::vector<std::string> surface_bit_names(const Scene& s) {
+  std::vector<std::string> names;
+  auto note = [&](const std::string& n) {
+    if (!contains(face_names(), n) && !contains(names, n)) names.push_back(n);
+  };
+  for (const Boundary& b : s.boundaries) note(b.on);
+  for (const Load& l : s.loads) note(l.face);
+  return names;
 }
 
 std::vector<std::string> schema_keys() {

@@ -67,11 +67,37 @@ struct Material {
 };
 
 struct Geometry {
-  std::string type;             // box | polygon | slope | gmsh | surface-mesh
+  std::string type;             // box | polygon | slope | gmsh | surface-mesh | footing
   Vec3 min{0, 0, 0}, max{0, 0, 0};            // box [m]
   std::vector<std::array<double, 2>> vertices;  // polygon (2D), counter-clockwise or clockwise
   nlohmann::json raw;           // the geometry object as written, for types that need more keys
+
+  // gmsh, surface-mesh: the file, resolved against the scene file's folder (absolute path).
+  std::string file;
+  std::map<std::string, double> parameters;  // gmsh .geo: DefineConstant overrides
+  std::string physical;  // gmsh: physical group (surface in 2D, volume in 3D) forming the body; "" = all
+
+  // slope (2D): foundation toe -> slope face -> crest, see docs/scene-format.md.
+  double foundation_depth = 0.0;  // m
+  double height = 0.0;            // m: slope height (slope), block height (footing)
+  double angle = 0.0;             // deg from horizontal; 0 when `ratio` is given
+  double ratio = 0.0;             // horizontal : vertical; 0 when `angle` is given
+  double crest_length = 0.0;      // m
+  double toe_length = 0.0;        // m
+  std::array<double, 2> origin{0.0, 0.0};  // m, lower-left corner of the foundation
+
+  // footing: a block centred on x (and z in 3D) standing on base_y.
+  double width = 0.0;      // m, along x
+  double length = 0.0;     // m, along z (3D)
+  double center_x = 0.0;   // m
+  double center_z = 0.0;   // m (3D)
+  double base_y = 0.0;     // m, resolved from `on` (the top of that body) when given
 };
+
+/// The named surfaces a geometry defines by its type (slope, footing), in the order documented in
+/// docs/scene-format.md. Empty for box, polygon and surface-mesh, and for gmsh, whose names (the
+/// physical groups) are known only once preprocess reads the file.
+std::vector<std::string> named_surfaces(const Geometry& g, int dimension);
 
 struct InitialState {
   std::optional<double> pore_pressure;  // Pa, compression positive
@@ -95,7 +121,7 @@ struct Body {
 };
 
 struct Boundary {
-  std::string on;  // x_min .. z_max
+  std::string on;  // x_min .. z_max, or a named surface of a body's geometry
   SolidBc solid = SolidBc::free;
   double coefficient = 0.0;  // friction coefficient (solid == friction)
   std::optional<FluidBc> fluid;
@@ -105,7 +131,7 @@ struct Boundary {
 struct Load {
   std::string type;   // traction | pressure
   std::string body;
-  std::string face;   // x_min .. z_max: the body's surface layer facing that way
+  std::string face;   // x_min .. z_max: the body's surface layer facing that way; or a named surface
   Vec3 value{0, 0, 0};   // traction vector [Pa] (traction) or value[0] = pressure [Pa] (pressure)
   std::optional<std::pair<Vec3, Vec3>> region;  // limit to particles inside [min, max] at t = 0
   TimeFunction function;
@@ -184,6 +210,15 @@ Scene load_scene(const std::string& path);
 Scene parse_scene(const nlohmann::json& j, const std::string& label);
 /// The scene with every default filled in, as JSON that parse_scene accepts again.
 nlohmann::json to_json(const Scene& s);
+
+/// Particle face bits: bits 0-5 are the axis faces (2 axis + side); bit kFirstSurfaceBit + k is the
+/// k-th entry of surface_bit_names(), the distinct named surfaces the scene refers to.
+constexpr int kFirstSurfaceBit = 6;
+constexpr int kMaxNamedSurfaces = 32 - kFirstSurfaceBit;  // 26
+/// The named surfaces (not x_min .. z_max) that `boundaries[].on` and then `loads[].face` refer
+/// to, each once, in order of first mention: the one place both preprocess (tagging) and the
+/// solver (loads) learn which face bit a name has.
+std::vector<std::string> surface_bit_names(const Scene& s);
 
 std::string to_string(Formulation f);
 std::string to_string(ShapeFunction f);

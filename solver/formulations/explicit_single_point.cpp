@@ -73,6 +73,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       pore_[k].k = m.has("hydraulic_conductivity") ? m.at("hydraulic_conductivity") : 0.0;
     }
     for (std::size_t p = 0; p < state.solid.size(); ++p) {  // fluid of each solid material (first seen)
+      if (state.solid.fluid_material[p] < 0) continue;      // a dry body in a saturated scene
       const auto& f = s.materials[state.solid.fluid_material[p]];
       auto& pf = pore_[state.solid.material[p]];
       pf.rho_f = f.at("density");
@@ -162,7 +163,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       if (material_particles_[k].empty() || !materials_[k]) continue;
       for (int p : material_particles_[k]) {
         const double rho_sat = (ps.m[p] + ps.m_f[p]) / ps.V[p];
-        const double M = materials_[k]->p_wave_modulus() + pore_[k].K_f / ps.n[p];
+        const double M = materials_[k]->p_wave_modulus() + (ps.fluid_material[p] >= 0 ? pore_[k].K_f / ps.n[p] : 0.0);
         c_max = std::max(c_max, std::sqrt(M / rho_sat));
       }
     }
@@ -238,7 +239,8 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       const double ps_solid = (1.0 - n) * ps.p[p] * V, ps_fluid = n * ps.p[p] * V;  // N m (N in 2D per m)
       const double m_s = ps.m[p], m_f = ps.m_f[p];
       const Vec<Dim> mv_s = m_s * ps.v[p], mv_f = m_f * ps.v_f[p];
-      const double drag = n * n * pf.rho_f * g_earth / pf.k * V;
+      const bool wet = ps.fluid_material[p] >= 0;  // dry points (no pore fluid) carry no drag
+      const double drag = wet ? n * n * pf.rho_f * g_earth / pf.k * V : 0.0;
       shape::for_each_node(grid_, sp, [&](std::size_t i, double N, const Vec<Dim>& dN) {
         auto& ns = solid_.acc[i];
         auto& nf = fluid_.acc[i];
@@ -390,7 +392,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
 #pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       const double np = ps.n[p], K_f = pore_[ps.material[p]].K_f;
-      pdot_[p] = -(K_f / np) * ((1.0 - np) * ps.L[p].trace() + np * div_f_[p]);
+      pdot_[p] = ps.fluid_material[p] < 0 ? 0.0 : -(K_f / np) * ((1.0 - np) * ps.L[p].trace() + np * div_f_[p]);
     }
     if (mfvp_order_ == 0) mfvp<0>(ps);
     if (mfvp_order_ == 1) mfvp<1>(ps);
@@ -504,8 +506,9 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       const double J = ps.F[p].determinant();
       ps.V[p] = J * ps.V0[p];
       ps.n[p] = 1.0 - (1.0 - ps.n[p]) * V_old / ps.V[p];
-      ps.m_f[p] = ps.n[p] * pore_[ps.material[p]].rho_f * ps.V[p];
-      if (!(J > 0.0) || !(ps.n[p] > 0.0 && ps.n[p] < 1.0)) bad = std::min(bad, p);
+      const bool wet = ps.fluid_material[p] >= 0;
+      if (wet) ps.m_f[p] = ps.n[p] * pore_[ps.material[p]].rho_f * ps.V[p];
+      if (!(J > 0.0) || !(ps.n[p] >= 0.0 && ps.n[p] < 1.0) || (wet && !(ps.n[p] > 0.0))) bad = std::min(bad, p);
     }
     return bad == transfer::no_particle ? -1 : bad;
   }

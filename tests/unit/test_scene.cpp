@@ -549,13 +549,12 @@ TEST(SceneErrors, DegenerateGeometryAndGrid) {
   EXPECT_NEAR(s.grid.max[0], 0.15, 1e-12);
 }
 
-TEST(SceneErrors, GeometryTypesNotImplementedYet) {
+TEST(SceneErrors, GeometryFileMustExist) {  // more geometry rules: tests/unit/test_geometry.cpp
   json j = scene_2d();
-  j["bodies"][0]["geometry"] = {{"type", "gmsh"}, {"file", "slope.geo"}};
+  j["bodies"][0]["geometry"] = {{"type", "gmsh"}, {"file", "no-such-slope.geo"}};
   const auto lines = problems(j);
-  EXPECT_TRUE(reports(j, "/bodies/0/geometry/type",
-                      "\"gmsh\" is not implemented yet in this version (available: box, polygon)"));
-  EXPECT_EQ(lines.size(), 1u) << dump_lines(lines);  // no unknown-key noise about "file"
+  EXPECT_TRUE(reports(j, "/bodies/0/geometry/file", "no such file"));
+  EXPECT_EQ(lines.size(), 1u) << dump_lines(lines);  // one line, no noise about the other keys
 }
 
 TEST(SceneErrors, FaceNamesDependOnDimension) {

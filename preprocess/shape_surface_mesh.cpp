@@ -1,0 +1,69 @@
+// `surface-mesh` geometries (3D): a closed surface read with CGAL (.off, .stl, .obj), checked
+// closed and free of self-intersections, with CGAL::Side_of_triangle_mesh as the inside test
+// (an AABB tree over the triangles, built once, on the first query).
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/IO/polygon_mesh_io.h>
+#include <CGAL/Polygon_mesh_processing/bbox.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
+#include <CGAL/Side_of_triangle_mesh.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/boost/graph/helpers.h>
+
+#include <filesystem>
+
+#include "preprocess/shape_types.hpp"
+
+namespace swmpm::pre {
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Mesh = CGAL::Surface_mesh<K::Point_3>;
+
+class SurfaceMeshShape final : public Shape {
+ public:
+  explicit SurfaceMeshShape(const std::string& file) : file_(file) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file_, ec)) fail("no such file");
+    // read_polygon_mesh merges duplicated vertices (STL stores each triangle's own corners) and
+    // orients the faces consistently before building the mesh.
+    if (!CGAL::IO::read_polygon_mesh(file_, mesh_) || mesh_.is_empty())
+      fail("CGAL could not read it as a polygon mesh, expected a valid .off, .stl or .obj surface");
+    if (!CGAL::is_triangle_mesh(mesh_)) PMP::triangulate_faces(mesh_);
+    if (!CGAL::is_closed(mesh_)) fail("got an open surface (" + std::to_string(border_edges()) +
+                                      " border edges), expected a closed surface around a volume");
+    if (PMP::does_self_intersect(mesh_))
+      fail("got a self-intersecting surface, expected a closed surface that does not cross itself");
+    const CGAL::Bbox_3 b = PMP::bbox(mesh_);
+    bounds_ = {Point{b.xmin(), b.ymin(), b.zmin()}, Point{b.xmax(), b.ymax(), b.zmax()}};
+    side_ = std::make_unique<CGAL::Side_of_triangle_mesh<Mesh, K>>(mesh_);
+  }
+  bool inside(const Point& x) const override {
+    return (*side_)(K::Point_3(x[0], x[1], x[2])) != CGAL::ON_UNBOUNDED_SIDE;
+  }
+  std::array<Point, 2> bounds() const override { return bounds_; }
+
+ private:
+  [[noreturn]] void fail(const std::string& why) const { throw GeometryError("file", file_ + ": " + why); }
+
+  std::size_t border_edges() const {
+    std::size_t n = 0;
+    for (auto h : mesh_.halfedges())
+      if (mesh_.is_border(h)) ++n;
+    return n;
+  }
+
+  std::string file_;
+  Mesh mesh_;  // side_ refers to it: the shape is neither copied nor moved
+  std::unique_ptr<CGAL::Side_of_triangle_mesh<Mesh, K>> side_;
+  std::array<Point, 2> bounds_{};
+};
+
+}  // namespace
+
+std::unique_ptr<Shape> make_surface_mesh(const scene::Geometry& g) {
+  return std::make_unique<SurfaceMeshShape>(g.file);
+}
+
+}  // namespace swmpm::pre
