@@ -56,9 +56,19 @@ int face_index(const std::string& name) {
   throw std::runtime_error("unknown face \"" + name + "\"");
 }
 
+namespace {
+bool is_axis_face(const std::string& name) {
+  return name.size() == 5 && (name[0] == 'x' || name[0] == 'y' || name[0] == 'z') &&
+         (name.substr(1) == "_min" || name.substr(1) == "_max");
+}
+}  // namespace
+
 template <int Dim>
 GridBoundary<Dim>::GridBoundary(const scene::Scene& s) {
   for (const auto& b : s.boundaries) {
+    if (!is_axis_face(b.on))
+      throw std::runtime_error("boundaries: \"" + b.on + "\" is a named surface; the solver applies boundary "
+                               "conditions on grid faces (x_min ... z_max) only in this version");
     const int f = face_index(b.on);
     if (b.solid == scene::SolidBc::free) continue;
     faces_.push_back({f / 2, f % 2, b.solid, b.coefficient});
@@ -69,6 +79,7 @@ template <int Dim>
 GridBoundary<Dim> GridBoundary<Dim>::fluid(const scene::Scene& s) {
   std::vector<Face> faces;
   for (const auto& b : s.boundaries) {
+    if (!is_axis_face(b.on)) continue;  // rejected with a message by the solid GridBoundary
     const int f = face_index(b.on);
     const bool impermeable = b.fluid ? *b.fluid == scene::FluidBc::impermeable : b.solid != scene::SolidBc::free;
     if (b.fluid && *b.fluid == scene::FluidBc::pressure)
@@ -114,8 +125,25 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const ParticleSet<Dim>&
     int body = -1;
     for (std::size_t b = 0; b < s.bodies.size(); ++b)
       if (s.bodies[b].name == load.body) body = static_cast<int>(b);
-    const int f = face_index(load.face);
-    const int axis = f / 2;
+    // An axis face (x_min ... z_max): the body's surface layer facing that way, loaded at the
+    // particles' face points. A named surface of the geometry (face bit kFirstSurfaceBit + k):
+    // the particles preprocess tagged within one lattice spacing of it, each with the nominal
+    // area spacing^(Dim-1) at its centre (exact for surfaces along the lattice; an inclined
+    // surface tags more particles per length, e.g. ~41 % more at 45 degrees — docs/scene-format.md).
+    const bool named = !is_axis_face(load.face);
+    int f = 0;
+    if (named) {
+      const auto names = scene::surface_bit_names(s);
+      const auto it = std::find(names.begin(), names.end(), load.face);
+      if (it == names.end()) throw std::runtime_error("loads: unknown surface \"" + load.face + "\"");
+      f = scene::kFirstSurfaceBit + static_cast<int>(it - names.begin());
+      if (load.type == "pressure")
+        throw std::runtime_error("loads: a pressure on the named surface \"" + load.face +
+                                 "\" needs surface normals, not implemented yet (use a traction vector)");
+    } else {
+      f = face_index(load.face);
+    }
+    const int axis = named ? -1 : f / 2;
     const double outward = f % 2 == 0 ? -1.0 : 1.0;
     Entry e{{}, {}, {}, TimeFunction(load.function)};
     for (std::size_t p = 0; p < ps.size(); ++p) {
@@ -128,14 +156,14 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const ParticleSet<Dim>&
       }
       // Nominal face area of the particle: its domain's extent across the face (unit thickness in 2D).
       double area = 1.0;
-      for (int a = 0; a < Dim; ++a)
+      for (int a = 0; a < Dim - (named ? 1 : 0); ++a)
         if (a != axis) area *= 2.0 * ps.l[p][a];
       Vec<Dim> force = Vec<Dim>::Zero();
       if (load.type == "pressure") force[axis] = -outward * load.value[0] * area;  // pushes inward
       else
         for (int a = 0; a < Dim; ++a) force[a] = load.value[a] * area;
       Vec<Dim> offset = Vec<Dim>::Zero();
-      offset[axis] = outward * ps.l[p][axis];
+      if (!named) offset[axis] = outward * ps.l[p][axis];
       e.ids.push_back(ps.id[p]);
       e.force.push_back(force);
       e.offset.push_back(offset);

@@ -117,7 +117,9 @@ double off_volume(const std::string& path) {
     const auto& a = v[std::stoul(tokens[k++])];
     const auto& b = v[std::stoul(tokens[k++])];
     const auto& c = v[std::stoul(tokens[k++])];
-    vol += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6;
+    // a . (b x c) / 6: the signed volume of the tetrahedron (origin, a, b, c)
+    vol += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+            a[2] * (b[0] * c[1] - b[1] * c[0])) / 6;
   }
   return vol;
 }
@@ -375,7 +377,8 @@ TEST(GeometryGmsh, StripFootingRectangleAndLoadCurve) {
 TEST(GeometryGmsh, PhysicalGroupsSelectTheBody) {
   const double dx = 0.005 / 2;
   auto count = [&](const std::string& physical, const json& parameters) {
-    const json g = {{"type", "gmsh"}, {"file", "column-in-tank.geo"}, {"physical", physical}, {"parameters", parameters}};
+    const json g = {{"type", "gmsh"}, {"file", "column-in-tank.geo"}, {"physical", physical},
+                    {"parameters", parameters}};
     return static_cast<double>(seed(parse(scene(2, g, {0, 0}, {0.5, 0.08}, 0.005))).count) * dx * dx;
   };
   EXPECT_LT(relative_error(count("column", json::object()), 0.0048), 0.02);
@@ -419,7 +422,7 @@ TEST(GeometryGmsh, BoxVolume3D) {
   EXPECT_EQ(got.tagged, 12u * 8u);      // the extruded side y = 0.1 (first curve), 0.6 x 0.4
 }
 
-TEST(GeometryGmsh, MshFileWithQuadrangles) {
+TEST(GeometryGmsh, MshFilesWithQuadranglesAndHexahedra) {
   const fs::path dir = scratch("gmsh-msh");
   write(dir / "plate.msh", R"($MeshFormat
 2.2 0 8
@@ -454,6 +457,32 @@ $EndElements
   json p = j;
   p["bodies"][0]["geometry"]["parameters"] = {{"a", 1}};
   EXPECT_TRUE(one_problem(p, "/bodies/0/geometry/parameters", {"a .msh is a finished mesh"}, dir.string()));
+  // One hexahedron, a skewed brick (split into 6 tetrahedra): x in [0.1, 0.9], y in [0.2, 0.6] + x / 4 ...
+  write(dir / "brick.msh", R"($MeshFormat
+2.2 0 8
+$EndMeshFormat
+$Nodes
+8
+1 0.1 0.2 0.1
+2 0.9 0.4 0.1
+3 0.9 0.8 0.1
+4 0.1 0.6 0.1
+5 0.1 0.2 0.7
+6 0.9 0.4 0.7
+7 0.9 0.8 0.7
+8 0.1 0.6 0.7
+$EndNodes
+$Elements
+1
+1 5 2 1 1 1 2 3 4 5 6 7 8
+$EndElements
+)");
+  // ... a parallelepiped of volume 0.8 x 0.4 x 0.6 = 0.192 m^3.
+  const Seeded brick = seed(parse(scene(3, {{"type", "gmsh"}, {"file", "brick.msh"}}, {0, 0, 0}, {1, 1, 1}, 0.05),
+                                  dir.string()));
+  const double e = relative_error(static_cast<double>(brick.count) * std::pow(0.025, 3), 0.192);
+  std::printf("hexahedron .msh: %zu particles, volume error %.3f %%\n", brick.count, 100 * e);
+  EXPECT_LT(e, 0.02);
 }
 
 TEST(GeometryGmsh, ResolvedSceneParsesBackToItself) {
@@ -546,7 +575,8 @@ TEST(GeometryGmshErrors, PreprocessReportsOneLineAndWritesNothing) {
 
 TEST(GeometrySurfaceMesh, SphereVolume) {
   const std::string sphere = kGeometries + "/sphere.off";
-  const scene::Scene s = parse(scene(3, {{"type", "surface-mesh"}, {"file", "sphere.off"}}, {0, 0, 0}, {1, 1, 1}, 0.05));
+  const json g = {{"type", "surface-mesh"}, {"file", "sphere.off"}};
+  const scene::Scene s = parse(scene(3, g, {0, 0, 0}, {1, 1, 1}, 0.05));
   const double dx = 0.025, volume = off_volume(sphere);
   const Seeded got = seed(s);
   const double e = relative_error(static_cast<double>(got.count) * dx * dx * dx, volume);
@@ -561,7 +591,8 @@ TEST(GeometrySurfaceMesh, SphereVolume) {
 TEST(GeometrySurfaceMeshErrors, OpenAndSelfIntersectingMeshes) {
   const fs::path dir = scratch("surface-mesh");
   // A tetrahedron without its bottom face.
-  write(dir / "open.off", "OFF\n4 3 0\n0.2 0.2 0.2\n0.8 0.2 0.2\n0.5 0.8 0.2\n0.5 0.5 0.8\n3 0 1 3\n3 1 2 3\n3 2 0 3\n");
+  write(dir / "open.off", "OFF\n4 3 0\n0.2 0.2 0.2\n0.8 0.2 0.2\n0.5 0.8 0.2\n0.5 0.5 0.8\n"
+                          "3 0 1 3\n3 1 2 3\n3 2 0 3\n");
   EXPECT_TRUE(one_problem(scene(3, {{"type", "surface-mesh"}, {"file", "open.off"}}, {0, 0, 0}, {1, 1, 1}, 0.1),
                           "/bodies/0/geometry/file", {"open.off", "open surface", "border edges"}, dir.string()));
   // Two closed tetrahedra that pass through each other.
