@@ -148,7 +148,8 @@ std::vector<std::string> plot_monitors(const std::string& run_dir, const std::ve
     std::ostringstream gp;
     gp << "set terminal pngcairo size 900," << 260 * rows + 60 << " font 'Sans,10' noenhanced\n"
        << "set output " << quoted(png.string()) << "\n"
-       << "set grid\nset key top right opaque box\nset format y '%g'\n"
+       // Headroom above the curves keeps the key (top right) off the data.
+       << "set grid\nset key top right opaque box\nset offsets 0, 0, graph 0.18, graph 0.04\nset format y '%g'\n"
        << "set multiplot layout " << rows << ",1 title " << quoted("monitor " + monitor + " (" + run_dir + ")") << "\n";
     for (std::size_t c : panel_cols) {
       const std::string quantity = t.names[c].substr(monitor.size() + 1);
@@ -210,15 +211,26 @@ std::vector<std::string> plot_fields(const std::string& run_dir, const std::stri
     // A margin of a particle spacing, at least 2 % of the larger extent, keeps the body off the frame.
     const double pad = std::max(h, 0.02 * std::max(*x_hi - *x_lo, *y_hi - *y_lo));
     const double x0 = *x_lo - pad, x1 = *x_hi + pad, y0 = *y_lo - pad, y1 = *y_hi + pad;
-    const double scale = 800.0 / std::max(x1 - x0, y1 - y0);  // px per m
-    const double plot_w = (x1 - x0) * scale, plot_h = (y1 - y0) * scale;
+    // Longer side 800 px; a long, flat body keeps at least 200 px of height (up to 1600 px wide).
+    const double dx = x1 - x0, dy = y1 - y0;
+    const double scale = std::max(800.0 / std::max(dx, dy), std::min(200.0 / dy, 1600.0 / dx));  // px per m
+    const double plot_w = dx * scale, plot_h = dy * scale;
     // Squares grown by 0.75 px overlap their neighbours: antialiased edges leave no light seams.
     for (auto& l : hx) l += 0.75 / scale;
     for (auto& l : hy) l += 0.75 / scale;
     const fs::path data = tmp / ("field" + std::to_string(k) + ".dat");
     write_columns(data, {&xs, &ys, &hx, &hy, &vs});
-    const int width = static_cast<int>(std::max(560.0, plot_w + 300.0));
-    const int height = static_cast<int>(std::max(420.0, plot_h + 150.0));
+    // The layout is fixed in pixels, not left to gnuplot: the plot area, then right of it the
+    // colour bar, its tick labels and its label (gnuplot's own cblabel placement can overlap the
+    // tick labels when the plot's aspect ratio is forced).
+    const double left = 90, right_room = 190, bottom = 60, top = 50;
+    const double width = std::max(560.0, left + plot_w + right_room);
+    const double height = std::max(300.0, bottom + plot_h + top);
+    const double x_plot = left + 0.5 * (width - left - plot_w - right_room);  // centred when widened
+    const double y_plot = bottom + 0.5 * (height - bottom - plot_h - top);
+    const double bar_x = x_plot + plot_w + 18, bar_w = 22;
+    auto sx = [&](double px) { return num(px / width, 8); };
+    auto sy = [&](double px) { return num(px / height, 8); };
     const auto [v_lo_it, v_hi_it] = std::minmax_element(vs.begin(), vs.end());
     double v_lo = *v_lo_it, v_hi = *v_hi_it;
     if (v_hi - v_lo <= 1e-12 * std::max(std::abs(v_lo), std::abs(v_hi))) {  // a uniform field
@@ -233,14 +245,20 @@ std::vector<std::string> plot_fields(const std::string& run_dir, const std::stri
 
     const fs::path png = plots / ("field_" + quantity + "_" + num(t_req) + ".png");
     std::ostringstream gp;
-    gp << "set terminal pngcairo size " << width << "," << height << " font 'Sans,11' noenhanced\n"
+    gp << "set terminal pngcairo size " << std::lround(width) << "," << std::lround(height) << " font 'Sans,11' noenhanced\n"
        << "set output " << quoted(png.string()) << "\n"
        << "set title " << quoted(title) << "\nset size ratio -1\n"
+       << "set lmargin at screen " << sx(x_plot) << "\nset rmargin at screen " << sx(x_plot + plot_w) << "\n"
+       << "set bmargin at screen " << sy(y_plot) << "\nset tmargin at screen " << sy(y_plot + plot_h) << "\n"
+       << "set colorbox vertical user origin screen " << sx(bar_x) << "," << sy(y_plot) << " size screen "
+       << sx(bar_w) << "," << sy(plot_h) << "\n"
+       << "set label 1 " << quoted(label(quantity, dim)) << " at screen " << sx(bar_x + bar_w + 80) << ","
+       << sy(y_plot + 0.5 * plot_h) << " center rotate by 90\n"
        << "set xrange [" << x0 << ":" << x1 << "]\nset yrange [" << y0 << ":" << y1 << "]\n"
        << "set xtics " << nice_step(x1 - x0, std::max(2.0, plot_w / 90.0)) << "\nset ytics "
        << nice_step(y1 - y0, std::max(2.0, plot_h / 60.0)) << "\n"
        << "set format x '%g'\nset format y '%g'\nset format cb '%g'\n"
-       << "set xlabel 'x [m]'\nset ylabel 'y [m]'\nset cblabel " << quoted(label(quantity, dim)) << "\n"
+       << "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
        << "set cbrange [" << v_lo << ":" << v_hi << "]\n"
        // viridis: ordered in lightness, readable in grey and by colour-blind readers
        << "set palette defined (0 '#440154', 1 '#3b528b', 2 '#21918c', 3 '#5ec962', 4 '#fde725')\n"

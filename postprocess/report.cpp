@@ -83,7 +83,7 @@ void setup_section(std::ostream& md, const json& scene, const json& run) {
   if (scene.contains("time")) {
     const auto& t = scene["time"];
     md << "| time | end " << get(t, "end") << " s, dt " << get(t, "dt");
-    if (t.contains("cfl")) md << " (cfl " << get(t, "cfl") << ")";
+    if (t.contains("cfl") && t.value("dt", json()).is_string()) md << " (cfl " << get(t, "cfl") << ")";  // auto
     md << " |\n";
   }
   if (scene.contains("materials")) {
