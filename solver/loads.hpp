@@ -8,6 +8,7 @@
 #include "scene/scene.hpp"
 #include "solver/grid/grid.hpp"
 #include "solver/particles/particles.hpp"
+#include "solver/shape/shape.hpp"
 
 namespace swmpm {
 
@@ -85,6 +86,32 @@ class ParticleLoads {
   };
   std::vector<Entry> entries_;
 };
+
+/// A load's force with the shape data at its point of action (ParticleLoads::for_each_force).
+template <int Dim, int S>
+struct FaceForce {
+  shape::ShapeData<Dim, S> sd;  // shape functions at the face point
+  Vec<Dim> f;                   // N (N/m in 2D)
+};
+
+/// The loads' forces at time t with their shape data, and the active node box grown to hold them
+/// (a face point can reach a node no particle centre touches). Shared by every formulation.
+template <class Shape, int Dim>
+void collect_face_forces(const Grid<Dim>& g, const ParticleLoads<Dim>& loads, const ParticleSet<Dim>& ps,
+                         const std::vector<int>& index_of_id, double t, NodeBox<Dim>& box,
+                         std::vector<FaceForce<Dim, Shape::support>>& out) {
+  out.clear();
+  loads.for_each_force(t, index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>& offset) {
+    FaceForce<Dim, Shape::support> ff{{}, f_p};
+    const Vec<Dim> x_face = (ps.x[p] + offset).cwiseMax(g.min()).cwiseMin(g.max());
+    shape::evaluate<Shape>(g, x_face, Vec<Dim>::Zero().eval(), ff.sd);
+    for (int a = 0; a < Dim; ++a) {
+      box.lo[a] = std::min(box.lo[a], ff.sd.base[a]);
+      box.hi[a] = std::max(box.hi[a], ff.sd.base[a] + Shape::support - 1);
+    }
+    out.push_back(ff);
+  });
+}
 
 /// Face index 2 * axis + side of a face name x_min .. z_max.
 int face_index(const std::string& name);

@@ -63,26 +63,15 @@ class Dry final : public Formulation<Dim> {
     long bad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);                       // (1)
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
-    // Tractions act at the particles' face points (ParticleLoads): their shape data, and the
-    // active box grown to hold them (a face point can reach a node no particle centre touches).
-    face_forces_.clear();
-    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>& offset) {
-      FaceForce ff{{}, f_p};
-      const Vec<Dim> x_face = (ps.x[p] + offset).cwiseMax(grid_.min()).cwiseMin(grid_.max());
-      shape::evaluate<Shape>(grid_, x_face, Vec<Dim>::Zero().eval(), ff.sd);
-      for (int a = 0; a < Dim; ++a) {
-        box_.lo[a] = std::min(box_.lo[a], ff.sd.base[a]);
-        box_.hi[a] = std::max(box_.hi[a], ff.sd.base[a] + S - 1);
-      }
-      face_forces_.push_back(ff);
-    });
+    // Tractions act at the particles' face points (ParticleLoads).
+    collect_face_forces<Shape>(grid_, loads_, ps, st.index_of_id, ctx.t, box_, face_forces_);
     lap("shape functions");
     transfer::build_schedule(grid_, sd_, schedule_);
     lap("schedule");
     transfer::clear_nodes(grid_, box_, nodes_);
 
     transfer::scatter_mass_momentum_force(grid_, schedule_, ps, sd_, b, nodes_);       // (2)
-    for (const FaceForce& ff : face_forces_)                                             // (3)
+    for (const auto& ff : face_forces_)                                             // (3)
       shape::for_each_node(grid_, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) { nodes_.acc[i].f += N * ff.f; });
     lap("p2g");
 
@@ -177,11 +166,7 @@ class Dry final : public Formulation<Dim> {
   std::vector<shape::ShapeData<Dim, S>> sd_;
   StripeSchedule schedule_;
   Reorder<Dim> reorder_;
-  struct FaceForce {
-    shape::ShapeData<Dim, S> sd;  // shape functions at the face point
-    Vec<Dim> f;                   // N (N/m in 2D)
-  };
-  std::vector<FaceForce> face_forces_;
+  std::vector<FaceForce<Dim, S>> face_forces_;
   static constexpr long reorder_interval = 10;  // steps
 };
 

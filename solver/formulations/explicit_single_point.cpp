@@ -117,13 +117,13 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     long bad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
-    collect_face_forces(st, ctx);
+    collect_face_forces<Shape>(grid_, loads_, ps, st.index_of_id, ctx.t, box_, face_forces_);
     transfer::build_schedule(grid_, sd_, schedule_);
     clear_nodes();
     lap("shape functions");
 
     scatter_both_phases(ps, b);                                                          // (2)
-    for (const FaceForce& ff : face_forces_)
+    for (const auto& ff : face_forces_)
       shape::for_each_node(grid_, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) { solid_.acc[i].f += N * ff.f; });
     lap("p2g");
 
@@ -200,25 +200,6 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
 
  private:
-  struct FaceForce {
-    shape::ShapeData<Dim, S> sd;
-    Vec<Dim> f;
-  };
-
-  void collect_face_forces(const State<Dim>& st, const StepContext& ctx) {
-    face_forces_.clear();
-    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>& offset) {
-      FaceForce ff{{}, f_p};
-      const Vec<Dim> x_face = (st.solid.x[p] + offset).cwiseMax(grid_.min()).cwiseMin(grid_.max());
-      shape::evaluate<Shape>(grid_, x_face, Vec<Dim>::Zero().eval(), ff.sd);
-      for (int a = 0; a < Dim; ++a) {
-        box_.lo[a] = std::min(box_.lo[a], ff.sd.base[a]);
-        box_.hi[a] = std::max(box_.hi[a], ff.sd.base[a] + S - 1);
-      }
-      face_forces_.push_back(ff);
-    });
-  }
-
   void clear_nodes() {
     transfer::clear_nodes(grid_, box_, solid_);
     transfer::clear_nodes(grid_, box_, fluid_);
@@ -530,7 +511,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::vector<std::array<double, 4>> cell_sum_;      // per cell: sum m div v_s, sum m_s, sum m_f div v_f, sum m_f
   NodeBox<Dim> box_;
   std::vector<shape::ShapeData<Dim, S>> sd_;
-  std::vector<FaceForce> face_forces_;
+  std::vector<FaceForce<Dim, S>> face_forces_;
   StripeSchedule schedule_;
   Reorder<Dim> reorder_;
   static constexpr long reorder_interval = 10;  // steps
