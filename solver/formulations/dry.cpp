@@ -54,12 +54,7 @@ class Dry final : public Formulation<Dim> {
 
     // (0) every reorder_interval steps, store the particles in last step's schedule order, so the
     //     transfers below walk particle memory sequentially (results stay thread-independent).
-    if (st.step % reorder_interval == 0 && schedule_.order().size() == ps.size() && !schedule_.in_order()) {
-      reorder_.apply(ps, schedule_.order());
-      st.index_ids();
-      regroup_by_material(ps, material_particles_);
-      lap("reorder");
-    }
+    if (reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval)) lap("reorder");
     long bad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);                       // (1)
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
@@ -143,9 +138,7 @@ class Dry final : public Formulation<Dim> {
         return;
       }
       const Vec<Dim> vL = nd.mv / m;
-      Vec<Dim> f = nd.f;
-      if (alpha > 0.0)
-        for (int a = 0; a < Dim; ++a) f[a] -= alpha * std::abs(f[a]) * (vL[a] > 0 ? 1.0 : (vL[a] < 0 ? -1.0 : 0.0));
+      const Vec<Dim> f = local_damping<Dim>(nd.f, vL, alpha);
       nodes_.vL[i] = vL;
       nodes_.v[i] = vL + dt / m * f;
     });

@@ -107,12 +107,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       t0 = t1;
     };
 
-    if (st.step % reorder_interval == 0 && schedule_.order().size() == ps.size() && !schedule_.in_order()) {  // (0)
-      reorder_.apply(ps, schedule_.order());
-      st.index_ids();
-      regroup_by_material(ps, material_particles_);
-      lap("reorder");
-    }
+    if (reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval)) lap("reorder");  // (0)
 
     long bad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);
@@ -241,11 +236,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   /// solved exactly (2x2); local damping acts on each phase's unbalanced force.
   void update_grid(double dt) {
     const double alpha = damping_;
-    auto damp = [alpha](Vec<Dim> f, const Vec<Dim>& v) {
-      if (alpha > 0.0)
-        for (int a = 0; a < Dim; ++a) f[a] -= alpha * std::abs(f[a]) * (v[a] > 0 ? 1.0 : (v[a] < 0 ? -1.0 : 0.0));
-      return f;
-    };
+    auto damp = [alpha](const Vec<Dim>& f, const Vec<Dim>& v) { return local_damping<Dim>(f, v, alpha); };
     grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
       const auto& ns = solid_.acc[i];
       const auto& nf = fluid_.acc[i];

@@ -10,6 +10,7 @@
 #include "solver/grid/grid.hpp"
 #include "solver/materials/material.hpp"
 #include "solver/shape/shape.hpp"
+#include "solver/transfer/schedule.hpp"
 
 namespace swmpm {
 
@@ -47,6 +48,27 @@ std::vector<std::vector<int>> group_by_material(const ParticleSet<Dim>& ps, std:
   std::vector<std::vector<int>> groups(materials);
   regroup_by_material(ps, groups);
   return groups;
+}
+
+/// Stores the particles in the schedule's order every `interval` steps (memory locality for the
+/// transfers; results stay thread-independent) and refreshes what indexes them. True if it did.
+template <int Dim>
+bool reorder_for_locality(State<Dim>& st, const StripeSchedule& schedule, Reorder<Dim>& reorder,
+                          std::vector<std::vector<int>>& material_particles, long interval) {
+  ParticleSet<Dim>& ps = st.solid;
+  if (st.step % interval != 0 || schedule.order().size() != ps.size() || schedule.in_order()) return false;
+  reorder.apply(ps, schedule.order());
+  st.index_ids();
+  regroup_by_material(ps, material_particles);
+  return true;
+}
+
+/// Cundall's local damping of a nodal force: f_a <- f_a - alpha |f_a| sign(v_a), per component.
+template <int Dim>
+inline Vec<Dim> local_damping(Vec<Dim> f, const Vec<Dim>& v, double alpha) {
+  if (alpha > 0.0)
+    for (int a = 0; a < Dim; ++a) f[a] -= alpha * std::abs(f[a]) * (v[a] > 0 ? 1.0 : (v[a] < 0 ? -1.0 : 0.0));
+  return f;
 }
 
 /// Sum of f(p) over p < n in fixed-size chunks, chunks added in order: the same bits for any
