@@ -14,17 +14,8 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-struct Result {
-  int status;
-  std::string out, err;
-};
-
-Result swmpm_cmd(const std::string& args, const fs::path& dir) {
-  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
-  const std::string cmd = std::string(SWMPM_EXE) + " " + args + " > " + out + " 2> " + err;
-  const int raw = std::system(cmd.c_str());
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, swmpm::testing::read_text(out), swmpm::testing::read_text(err)};
-}
+using swmpm::testing::Result;
+using swmpm::testing::swmpm_cmd;
 
 json good_scene() { return swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/elastic-column/scene.json"); }
 

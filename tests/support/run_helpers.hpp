@@ -3,6 +3,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <filesystem>
 #include <fstream>
@@ -54,6 +55,20 @@ inline scene::PointCloud last_frame(const std::string& run_dir) {
 inline std::string read_text(const std::string& path) {
   std::ifstream in(path);
   return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// What the `swmpm` executable (SWMPM_EXE, a compile definition of the test targets) did.
+struct Result {
+  int status;
+  std::string out, err;
+};
+
+/// Runs `swmpm ARGS` through the shell, capturing stdout and stderr into files under `dir`.
+inline Result swmpm_cmd(const std::string& args, const fs::path& dir) {
+  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
+  const std::string cmd = std::string(SWMPM_EXE) + " " + args + " > " + out + " 2> " + err;
+  const int raw = std::system(cmd.c_str());
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, read_text(out), read_text(err)};
 }
 
 }  // namespace swmpm::testing

@@ -29,17 +29,8 @@ double exact_stress_yy(double y) {
   return -rho * g * (H - y0);
 }
 
-struct Result {
-  int status;
-  std::string out, err;
-};
-
-Result swmpm_cmd(const std::string& args, const fs::path& dir) {
-  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
-  const std::string cmd = std::string(SWMPM_EXE) + " " + args + " > " + out + " 2> " + err;
-  const int raw = std::system(cmd.c_str());
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, swmpm::testing::read_text(out), swmpm::testing::read_text(err)};
-}
+using swmpm::testing::Result;
+using swmpm::testing::swmpm_cmd;
 
 std::size_t lines(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
 
