@@ -239,6 +239,47 @@ double SurfaceElements::measure() const {
   return m;
 }
 
+void SurfaceElements::samples(double max_size, std::vector<Point>& x, std::vector<Point>& normal,
+                               std::vector<double>& measure) const {
+  for (const auto& f : facets_) {
+    const Point e1 = sub(f[1], f[0]);
+    if (dim_ == 2) {
+      const double len = std::sqrt(dot(e1, e1));
+      if (len <= 0.0) continue;
+      const int m = std::max(1, static_cast<int>(std::ceil(len / max_size)));
+      const Point n{-e1[1] / len, e1[0] / len, 0.0};
+      for (int i = 0; i < m; ++i) {
+        x.push_back(axpy((i + 0.5) / m, e1, f[0]));
+        normal.push_back(n);
+        measure.push_back(len / m);
+      }
+      continue;
+    }
+    const Point e2 = sub(f[2], f[0]), c = cross(e1, e2);
+    const double twice_area = std::sqrt(dot(c, c));
+    if (twice_area <= 0.0) continue;
+    const Point e3 = sub(f[2], f[1]);
+    const double longest = std::sqrt(std::max({dot(e1, e1), dot(e2, e2), dot(e3, e3)}));
+    const int m = std::max(1, static_cast<int>(std::ceil(longest / max_size)));
+    const Point n{c[0] / twice_area, c[1] / twice_area, c[2] / twice_area};
+    const double piece = 0.5 * twice_area / (m * m);
+    auto at = [&](double u, double v) { return axpy(v, e2, axpy(u, e1, f[0])); };
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; i + j < m; ++j) {
+        // m^2 congruent sub-triangles: "up" (i, j), (i+1, j), (i, j+1) and, where it fits,
+        // "down" (i+1, j), (i, j+1), (i+1, j+1); samples at their centroids.
+        x.push_back(at((i + 1.0 / 3.0) / m, (j + 1.0 / 3.0) / m));
+        normal.push_back(n);
+        measure.push_back(piece);
+        if (i + j + 2 <= m) {
+          x.push_back(at((i + 2.0 / 3.0) / m, (j + 2.0 / 3.0) / m));
+          normal.push_back(n);
+          measure.push_back(piece);
+        }
+      }
+  }
+}
+
 SurfaceElements polyline(const std::vector<std::array<double, 2>>& points) {
   std::vector<Point> nodes;
   std::vector<std::array<std::uint32_t, 3>> segments;

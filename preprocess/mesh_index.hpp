@@ -92,6 +92,10 @@ class SurfaceElements {
   std::size_t size() const { return facets_.size(); }
   /// Total length (2D) or area (3D) [m, m^2].
   double measure() const;
+  /// Quadrature points of the surface: each facet cut into pieces no wider than `max_size` (m
+  /// segments of a segment, m^2 sub-triangles of a triangle), one sample at each piece's centroid
+  /// with the piece's length or area and the facet's unit normal (either orientation).
+  void samples(double max_size, std::vector<Point>& x, std::vector<Point>& normal, std::vector<double>& measure) const;
 
  private:
   /// Distance from y to facet f along a perpendicular, or -1 when its foot is off the facet.

@@ -16,14 +16,14 @@ namespace fs = std::filesystem;
 
 namespace swmpm::pre {
 
-std::vector<SeedPoint> seed_points(const scene::Scene& s) {
+std::vector<SeedPoint> seed_points(const scene::Scene& s) { return seed_points(s, make_shapes(s)); }
+
+std::vector<SeedPoint> seed_points(const scene::Scene& s, const std::vector<std::unique_ptr<Shape>>& shapes) {
   const int dim = s.dimension;
   const double h = s.grid.cell_size;
-  const std::string scene_dir = fs::path(s.source_file).parent_path().string();
 
   using Seeded = SeedPoint;
-  // Built and checked once (files read, named surfaces present); named surfaces get face bits 6..
-  const std::vector<std::unique_ptr<Shape>> shapes = make_shapes(s);
+  // Named surfaces get face bits 6..
   const std::vector<std::string> surface_bits = scene::surface_bit_names(s);
 
   std::array<int, 3> cells{1, 1, 1};
@@ -223,6 +223,32 @@ scene::PointCloud fluid_cloud(const scene::Scene& s, const std::vector<SeedPoint
 
 }  // namespace
 
+scene::PointCloud surface_samples(const scene::Scene& s, const std::vector<std::unique_ptr<Shape>>& shapes) {
+  const auto names = scene::surface_bit_names(s);
+  scene::PointCloud c;
+  std::vector<double> surface, body, normal, area;
+  for (std::size_t k = 0; k < names.size(); ++k)
+    for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+      // A quarter of the body's lattice spacing: every particle of the surface gets samples, and
+      // every grid node along it is within half a cell of one.
+      const double spacing = s.grid.cell_size / s.bodies[b].particles_per_cell;
+      const Shape::Samples smp = shapes[b]->surface_samples(names[k], 0.25 * spacing);
+      for (std::size_t j = 0; j < smp.x.size(); ++j) {
+        c.points.push_back(smp.x[j]);
+        surface.push_back(static_cast<double>(k));
+        body.push_back(static_cast<double>(b));
+        for (int a = 0; a < 3; ++a) normal.push_back(smp.normal[j][a]);
+        area.push_back(smp.measure[j]);
+      }
+    }
+  if (c.points.empty()) return c;
+  c.add("surface", 1).values = std::move(surface);
+  c.add("body", 1).values = std::move(body);
+  c.add("normal", 3).values = std::move(normal);
+  c.add("area", 1).values = std::move(area);
+  return c;
+}
+
 Phases seed_phases(const scene::Scene& s) {
   const WaterLayout w = water_layout(s.formulation);
   std::vector<BodyContent> content;
@@ -230,12 +256,15 @@ Phases seed_phases(const scene::Scene& s) {
   reject_free_water(s, content, w);
   // Free water stays in the points even where it is not written (mpm-fem): it still loads the
   // soil below it and takes its place where bodies overlap.
-  const std::vector<SeedPoint> points = seed_points(s);
+  // Built and checked once (files read, named surfaces present).
+  const std::vector<std::unique_ptr<Shape>> shapes = make_shapes(s);
+  const std::vector<SeedPoint> points = seed_points(s, shapes);
   const InitialFields init = initial_state(s, points, content);
 
   Phases out;
   out.solid = solid_cloud(s, points, content, init, w);
   if (w.fluid_particles) out.fluid = fluid_cloud(s, points, content, init);
+  out.surfaces = surface_samples(s, shapes);
   if (w.free_water_on_grid)
     for (std::size_t b = 0; b < s.bodies.size(); ++b)
       if (!content[b].has_solid())
@@ -280,7 +309,8 @@ std::string preprocess(const std::string& scene_path, const std::string& out_dir
   std::ofstream(dir / "scene.json") << scene::to_json(s).dump(2) << "\n";
   if (!quiet) std::cout << "preprocess: formulation " << scene::to_string(s.formulation) << " (" << s.formulation_reason << ")\n";
   const bool pore_fluid_on_solid = phases.solid.find("pore_pressure") != nullptr;
-  for (const auto& [phase, cloud] : {std::pair{"solid", &phases.solid}, std::pair{"fluid", &phases.fluid}}) {
+  for (const auto& [phase, cloud] : {std::pair{"solid", &phases.solid}, std::pair{"fluid", &phases.fluid},
+                                     std::pair{"surfaces", &phases.surfaces}}) {
     const fs::path file = dir / "particles" / (std::string(phase) + ".vtu");
     if (cloud->size() == 0) {
       fs::remove(file);  // an earlier run's file would be read as this scene's particles
@@ -288,7 +318,7 @@ std::string preprocess(const std::string& scene_path, const std::string& out_dir
     }
     scene::write_vtu(file.string(), *cloud);
     if (!quiet)
-      std::cout << "preprocess: " << cloud->size() << " " << phase << " particles"
+      std::cout << "preprocess: " << cloud->size() << " " << (phase == std::string("surfaces") ? "named-surface samples" : std::string(phase) + " particles")
                 << (phase == std::string("solid") && pore_fluid_on_solid ? " (with their pore fluid)" : "") << " -> "
                 << file.string() << "\n";
   }

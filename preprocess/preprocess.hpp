@@ -25,11 +25,20 @@ struct SeedPoint {
 /// The lattice points of every body (solid, saturated and free water), in body order, with
 /// overlaps resolved (a point inside a later body's geometry belongs to that body).
 std::vector<SeedPoint> seed_points(const scene::Scene& s);
+/// The same with the bodies' shapes already built (make_shapes).
+std::vector<SeedPoint> seed_points(const scene::Scene& s, const std::vector<std::unique_ptr<Shape>>& shapes);
+
+/// particles/surfaces.vtu: samples of every named surface the scene refers to, on each body whose
+/// geometry has it (Shape::surface_samples at a quarter of the body's lattice spacing). Arrays:
+/// `surface` (k of face bit 6 + k), `body`, `normal` (outward unit), `area` (m in 2D, m^2 in 3D).
+/// Empty when the scene names no surface.
+scene::PointCloud surface_samples(const scene::Scene& s, const std::vector<std::unique_ptr<Shape>>& shapes);
 
 /// The particle sets of a scene, as written to particles/<phase>.vtu. An empty set is not written.
 struct Phases {
   scene::PointCloud solid;  // skeleton particles (single-point sets also carry the pore fluid)
   scene::PointCloud fluid;  // double-point pore fluid and free water
+  scene::PointCloud surfaces;  // named-surface samples (surface_samples)
   std::vector<std::string> notes;  // what was left out on purpose and why, for the log
 };
 

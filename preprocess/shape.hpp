@@ -36,6 +36,15 @@ class Shape {
   virtual Point outward_normal(const std::string& /*name*/, const Point& /*x*/, double /*tol*/) const {
     return {0.0, 0.0, 0.0};
   }
+  /// Quadrature samples of a named surface (empty for a name the shape lacks): points on it no
+  /// further than about `max_size` apart, each with the length (2D) or area (3D) it stands for
+  /// and the outward unit normal there. The solver shares loads among the particles by them and
+  /// finds the grid nodes of boundary conditions on named surfaces (particles/surfaces.vtu).
+  struct Samples {
+    std::vector<Point> x, normal;
+    std::vector<double> measure;  // m (2D, per metre of thickness) or m^2
+  };
+  virtual Samples surface_samples(const std::string& /*name*/, double /*max_size*/) const { return {}; }
 };
 
 /// A geometry that cannot be built from its file or keys. `key` is the geometry key at fault

@@ -36,6 +36,21 @@ class SurfacedShape : public Shape {
       for (double& c : n) c = -c;
     return n;
   }
+  /// The facets' samples, each normal turned outward as outward_normal turns it.
+  Samples surface_samples(const std::string& name, double max_size) const override {
+    Samples out;
+    const auto it = surfaces_.find(name);
+    if (it == surfaces_.end()) return out;
+    it->second.samples(max_size, out.x, out.normal, out.measure);
+    for (std::size_t k = 0; k < out.x.size(); ++k) {
+      const Point& x = out.x[k];
+      Point& n = out.normal[k];
+      const Point probe{x[0] + max_size * n[0], x[1] + max_size * n[1], x[2] + max_size * n[2]};
+      if (inside(probe))
+        for (double& c : n) c = -c;
+    }
+    return out;
+  }
 
  protected:
   void add_surface(const std::string& name, SurfaceElements elements) {

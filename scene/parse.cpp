@@ -894,8 +894,8 @@ const Table& boundary_table() {
       "Boundary", "`boundaries[]`",
       {
           {.name = "on", .type = Type::string, .required = true,
-           .meaning = "Grid face (`z_min`, `z_max` only in 3D), or a geometry's named surface (checked and "
-                      "stored; the solver applies grid faces only); each at most once.",
+           .meaning = "Grid face (`z_min`, `z_max` only in 3D), or a geometry's named surface (a rigid "
+                      "wall along it); each at most once.",
            .allowed = "`x_min`, `x_max`, `y_min`, `y_max`, `z_min`, `z_max`, or a named surface"},
           {.name = "solid", .type = Type::choice, .def = "free", .values = solid_bc_names(),
            .meaning = "Solid velocity condition: fixed (all components), roller (normal), free, friction."},

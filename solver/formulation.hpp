@@ -39,6 +39,7 @@ struct Health {
 template <int Dim>
 struct State {
   ParticleSet<Dim> solid;
+  SurfaceSamples<Dim> surfaces;  // named-surface samples at t = 0 (empty without named surfaces)
   double time = 0.0;
   long step = 0;
   Health health;

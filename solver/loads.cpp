@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <optional>
 #include <stdexcept>
+#include <unordered_map>
 
 #include <muParser.h>
 
@@ -57,36 +60,119 @@ int face_index(const std::string& name) {
 }
 
 namespace {
+
 bool is_axis_face(const std::string& name) {
   return name.size() == 5 && (name[0] == 'x' || name[0] == 'y' || name[0] == 'z') &&
          (name.substr(1) == "_min" || name.substr(1) == "_max");
 }
+
+/// k of the named surface `name` (face bit kFirstSurfaceBit + k); `what` names the JSON place.
+int surface_index(const scene::Scene& s, const std::string& name, const std::string& what) {
+  const auto names = scene::surface_bit_names(s);
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) throw std::runtime_error(what + ": unknown surface \"" + name + "\"");
+  return static_cast<int>(it - names.begin());
+}
+
+/// The grid nodes a condition on surface k constrains: those within half a cell of the surface
+/// and those behind it (outside the body) within the shape functions' reach, so the surface acts
+/// as a rigid wall: a particle whose domain slides past the surface meets constrained nodes only
+/// (an unconstrained node behind the surface would take its mass and let it sink through). Each
+/// node takes the outward normal of its nearest sample. In node order (deterministic).
+template <int Dim>
+std::vector<typename GridBoundary<Dim>::SurfaceNode> nodes_of_surface(const scene::Scene& s, const Grid<Dim>& g,
+                                                                      const SurfaceSamples<Dim>& smp, int k,
+                                                                      scene::SolidBc kind, double mu) {
+  const double h = g.h();
+  double reach = 1.5 * h;  // GIMP (h + l <= 1.5 h) and quadratic B-splines
+  if (s.grid.shape_function == scene::ShapeFunction::linear) reach = h;
+  if (s.grid.shape_function == scene::ShapeFunction::bspline3) reach = 2.0 * h;
+  std::map<std::size_t, std::pair<double, Vec<Dim>>> best;  // node -> (distance to the nearest sample, its normal)
+  for (std::size_t j = 0; j < smp.size(); ++j) {
+    if (smp.surface[j] != k) continue;
+    const Vec<Dim>& xs = smp.x[j];
+    const Vec<Dim>& n = smp.normal[j];
+    NodeBox<Dim> box;
+    const auto lo = g.nearest_node((xs.array() - reach - h).matrix().eval());
+    const auto hi = g.nearest_node((xs.array() + reach + h).matrix().eval());
+    box.lo = lo;
+    box.hi = hi;
+    g.for_each_node(box, [&](std::size_t node, const std::array<int, Dim>& ijk) {
+      const Vec<Dim> d = g.node_position(ijk) - xs;
+      const double along = d.dot(n);                    // > 0: behind the surface (outside the body)
+      const double across = (d - along * n).norm();      // tangential distance
+      if (along < -0.5 * h || along > reach || across > 0.5 * h) return;
+      const double dist = d.norm();
+      auto [it, fresh] = best.try_emplace(node, dist, n);
+      if (!fresh && dist < it->second.first) it->second = {dist, n};
+    });
+  }
+  std::vector<typename GridBoundary<Dim>::SurfaceNode> out;
+  for (const auto& [node, dn] : best) out.push_back({node, dn.second, kind, mu});
+  return out;
+}
+
+/// One velocity constraint: v is the node's velocity, n the outward normal of the body (into the
+/// wall), e.g. -e_x on an x_min face.
+template <int Dim>
+void constrain(Vec<Dim>& v, const Vec<Dim>& n, scene::SolidBc kind, double mu, bool with_friction) {
+  switch (kind) {
+    case scene::SolidBc::fixed: v.setZero(); break;
+    case scene::SolidBc::roller: v -= v.dot(n) * n; break;
+    case scene::SolidBc::friction: {
+      const double vn = v.dot(n);  // > 0: moving into the wall
+      if (vn <= 0.0) break;
+      v -= vn * n;
+      if (!with_friction) break;
+      // Coulomb friction (Bardenhagen et al. 2001): the tangential speed drops by mu * vn.
+      const double vt = v.norm();
+      if (vt > 0.0) v *= std::max(0.0, 1.0 - mu * vn / vt);
+      break;
+    }
+    case scene::SolidBc::free: break;
+  }
+}
+
 }  // namespace
 
 template <int Dim>
-GridBoundary<Dim>::GridBoundary(const scene::Scene& s) {
-  for (const auto& b : s.boundaries) {
-    if (!is_axis_face(b.on))
-      throw std::runtime_error("boundaries: \"" + b.on + "\" is a named surface; the solver applies boundary "
-                               "conditions on grid faces (x_min ... z_max) only in this version");
-    const int f = face_index(b.on);
+GridBoundary<Dim>::GridBoundary(const scene::Scene& s, const Grid<Dim>& g, const SurfaceSamples<Dim>& samples) {
+  for (std::size_t i = 0; i < s.boundaries.size(); ++i) {
+    const auto& b = s.boundaries[i];
     if (b.solid == scene::SolidBc::free) continue;
-    faces_.push_back({f / 2, f % 2, b.solid, b.coefficient});
+    if (is_axis_face(b.on)) {
+      const int f = face_index(b.on);
+      faces_.push_back({f / 2, f % 2, b.solid, b.coefficient});
+      continue;
+    }
+    const int k = surface_index(s, b.on, "boundaries/" + std::to_string(i) + "/on");
+    const auto nodes = nodes_of_surface(s, g, samples, k, b.solid, b.coefficient);
+    if (nodes.empty())
+      throw std::runtime_error("boundaries/" + std::to_string(i) + "/on: the named surface \"" + b.on +
+                               "\" has no samples in particles/surfaces.vtu (run swmpm preprocess again)");
+    nodes_.insert(nodes_.end(), nodes.begin(), nodes.end());
   }
 }
 
 template <int Dim>
-GridBoundary<Dim> GridBoundary<Dim>::fluid(const scene::Scene& s) {
+GridBoundary<Dim> GridBoundary<Dim>::fluid(const scene::Scene& s, const Grid<Dim>& g,
+                                           const SurfaceSamples<Dim>& samples) {
   std::vector<Face> faces;
-  for (const auto& b : s.boundaries) {
-    if (!is_axis_face(b.on)) continue;  // rejected with a message by the solid GridBoundary
-    const int f = face_index(b.on);
+  std::vector<SurfaceNode> nodes;
+  for (std::size_t i = 0; i < s.boundaries.size(); ++i) {
+    const auto& b = s.boundaries[i];
     const bool impermeable = b.fluid ? *b.fluid == scene::FluidBc::impermeable : b.solid != scene::SolidBc::free;
-    if (b.fluid && *b.fluid == scene::FluidBc::pressure)
-      throw std::runtime_error("boundaries: fluid \"pressure\" on " + b.on + " is not implemented yet in this version");
-    if (impermeable) faces.push_back({f / 2, f % 2, scene::SolidBc::roller, 0.0});
+    if (!impermeable) continue;
+    if (is_axis_face(b.on)) {
+      const int f = face_index(b.on);
+      faces.push_back({f / 2, f % 2, scene::SolidBc::roller, 0.0});
+      continue;
+    }
+    const int k = surface_index(s, b.on, "boundaries/" + std::to_string(i) + "/on");
+    const auto more = nodes_of_surface(s, g, samples, k, scene::SolidBc::roller, 0.0);
+    nodes.insert(nodes.end(), more.begin(), more.end());
   }
-  return GridBoundary(std::move(faces));
+  return GridBoundary(std::move(faces), std::move(nodes));
 }
 
 template <int Dim>
@@ -97,77 +183,186 @@ void GridBoundary<Dim>::apply(const Grid<Dim>& g, const NodeBox<Dim>& box, std::
     if (i_face < box.lo[face.axis] || i_face > box.hi[face.axis]) continue;
     NodeBox<Dim> fb = box;
     fb.lo[face.axis] = fb.hi[face.axis] = i_face;
-    const double n = face.side == 0 ? -1.0 : 1.0;  // outward normal component along the axis
-    g.for_each_node(fb, [&](std::size_t i, const auto&) {
-      Vec<Dim>& vi = v[i];
-      switch (face.kind) {
-        case scene::SolidBc::fixed: vi.setZero(); break;
-        case scene::SolidBc::roller: vi[face.axis] = 0.0; break;
-        case scene::SolidBc::friction: {
-          const double vn = vi[face.axis] * n;  // > 0: moving into the wall
-          if (vn <= 0.0) break;
-          vi[face.axis] = 0.0;
-          if (!with_friction) break;
-          // Coulomb friction (Bardenhagen et al. 2001): the tangential speed drops by mu * vn.
-          const double vt = vi.norm();
-          if (vt > 0.0) vi *= std::max(0.0, 1.0 - face.mu * vn / vt);
-          break;
+    Vec<Dim> n = Vec<Dim>::Zero();
+    n[face.axis] = face.side == 0 ? -1.0 : 1.0;  // outward normal of the grid face
+    g.for_each_node(fb, [&](std::size_t i, const auto&) { constrain<Dim>(v[i], n, face.kind, face.mu, with_friction); });
+  }
+  // Nodes outside the active box hold stale velocities no particle reads; constraining them is harmless.
+  for (const SurfaceNode& sn : nodes_) constrain<Dim>(v[sn.node], sn.n, sn.kind, sn.mu, with_friction);
+}
+
+namespace {
+
+/// Shares the samples of surface k on body `body` (inside `region`, when given) among the
+/// particles `cand`: each sample goes to the nearest candidate within 1.5 lattice spacings. Per
+/// candidate: the length/area it receives, the area-weighted sum of normals, and of the offsets
+/// from the particle centre to the samples. A surface at any angle then carries its exact length
+/// or area, however the lattice aliases the band of tagged particles.
+template <int Dim>
+void share_samples(const ParticleSet<Dim>& ps, const std::vector<int>& cand, const SurfaceSamples<Dim>& smp, int k,
+                   int body, const std::optional<std::pair<scene::Vec3, scene::Vec3>>& region, std::vector<double>& area,
+                   std::vector<Vec<Dim>>& normal, std::vector<Vec<Dim>>& offset) {
+  area.assign(cand.size(), 0.0);
+  normal.assign(cand.size(), Vec<Dim>::Zero());
+  offset.assign(cand.size(), Vec<Dim>::Zero());
+  if (cand.empty()) return;
+  double reach = 0.0;
+  for (int p : cand) reach = std::max(reach, 3.0 * ps.l[p].maxCoeff());  // 1.5 spacings
+  // Buckets of size `reach`: a sample's nearest candidate within reach is in its 3^Dim neighbourhood.
+  auto key = [&](const Vec<Dim>& x, const std::array<long, Dim>& shift) {
+    std::int64_t h = 0;
+    for (int a = 0; a < Dim; ++a) h = h * 2000003 + static_cast<std::int64_t>(std::floor(x[a] / reach)) + shift[a];
+    return h;
+  };
+  std::unordered_map<std::int64_t, std::vector<int>> buckets;
+  std::array<long, Dim> zero{};
+  for (std::size_t c = 0; c < cand.size(); ++c) buckets[key(ps.x0[cand[c]], zero)].push_back(static_cast<int>(c));
+  for (std::size_t j = 0; j < smp.size(); ++j) {
+    if (smp.surface[j] != k || smp.body[j] != body) continue;
+    if (region) {
+      bool in = true;
+      for (int a = 0; a < Dim; ++a) in = in && smp.x[j][a] >= region->first[a] && smp.x[j][a] <= region->second[a];
+      if (!in) continue;
+    }
+    int best = -1;
+    double best_d = reach;
+    std::array<long, Dim> shift{};
+    for (int n = 0; n < (Dim == 2 ? 9 : 27); ++n) {
+      for (int a = 0, r = n; a < Dim; ++a, r /= 3) shift[a] = r % 3 - 1;
+      const auto it = buckets.find(key(smp.x[j], shift));
+      if (it == buckets.end()) continue;
+      for (int c : it->second) {
+        const double d = (ps.x0[cand[c]] - smp.x[j]).norm();
+        if (d < best_d || (d == best_d && best >= 0 && c < best)) {
+          best_d = d;
+          best = c;
         }
-        case scene::SolidBc::free: break;
       }
-    });
+    }
+    if (best < 0) continue;  // the surface reaches past the body (or the region)
+    area[best] += smp.area[j];
+    normal[best] += smp.area[j] * smp.normal[j];
+    offset[best] += smp.area[j] * (smp.x[j] - ps.x0[cand[best]]);
   }
 }
 
+}  // namespace
+
 template <int Dim>
-ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const ParticleSet<Dim>& ps) {
-  for (const auto& load : s.loads) {
-    int body = -1;
+ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, const ParticleSet<Dim>& ps,
+                                  const SurfaceSamples<Dim>& samples) {
+  auto body_index = [&](const std::string& name) {
     for (std::size_t b = 0; b < s.bodies.size(); ++b)
-      if (s.bodies[b].name == load.body) body = static_cast<int>(b);
-    // An axis face (x_min ... z_max): the body's surface layer facing that way, loaded at the
-    // particles' face points. A named surface of the geometry (face bit kFirstSurfaceBit + k):
-    // the particles preprocess tagged within one lattice spacing of it, each with the nominal
-    // area spacing^(Dim-1) at its centre (exact for surfaces along the lattice; an inclined
-    // surface tags more particles per length, e.g. ~41 % more at 45 degrees — docs/scene-format.md).
-    const bool named = !is_axis_face(load.face);
-    int f = 0;
-    if (named) {
-      const auto names = scene::surface_bit_names(s);
-      const auto it = std::find(names.begin(), names.end(), load.face);
-      if (it == names.end()) throw std::runtime_error("loads: unknown surface \"" + load.face + "\"");
-      f = scene::kFirstSurfaceBit + static_cast<int>(it - names.begin());
-      if (load.type == "pressure")
-        throw std::runtime_error("loads: a pressure on the named surface \"" + load.face +
-                                 "\" needs surface normals, not implemented yet (use a traction vector)");
-    } else {
-      f = face_index(load.face);
-    }
-    const int axis = named ? -1 : f / 2;
-    const double outward = f % 2 == 0 ? -1.0 : 1.0;
-    Entry e{{}, {}, {}, TimeFunction(load.function)};
-    for (std::size_t p = 0; p < ps.size(); ++p) {
-      if (ps.body[p] != body || !(ps.faces[p] & (1u << f))) continue;
-      if (load.region) {
-        bool in = true;
-        for (int a = 0; a < Dim; ++a)
-          in = in && ps.x0[p][a] >= load.region->first[a] && ps.x0[p][a] <= load.region->second[a];
-        if (!in) continue;
+      if (s.bodies[b].name == name) return static_cast<int>(b);
+    return -1;
+  };
+  auto in_region = [&](std::size_t p, const std::optional<std::pair<scene::Vec3, scene::Vec3>>& region) {
+    if (!region) return true;
+    for (int a = 0; a < Dim; ++a)
+      if (ps.x0[p][a] < region->first[a] || ps.x0[p][a] > region->second[a]) return false;
+    return true;
+  };
+  // Named surface k: the tagged particles of `keep` share the surface's samples (share_samples);
+  // force_of(area, area-weighted normal) is each one's force at f(t) = 1.
+  auto add_named = [&](Entry& e, int k, int body, const std::optional<std::pair<scene::Vec3, scene::Vec3>>& region,
+                       auto&& keep, auto&& force_of) {
+    std::vector<int> cand;
+    for (std::size_t p = 0; p < ps.size(); ++p)
+      if ((ps.faces[p] & (1u << (scene::kFirstSurfaceBit + k))) && keep(p) && in_region(p, region))
+        cand.push_back(static_cast<int>(p));
+    std::vector<double> area;
+    std::vector<Vec<Dim>> normal, offset;
+    for (int b = 0; b < static_cast<int>(s.bodies.size()); ++b) {
+      if (body >= 0 && b != body) continue;
+      std::vector<int> of_body;
+      for (int p : cand)
+        if (ps.body[p] == b) of_body.push_back(p);
+      share_samples(ps, of_body, samples, k, b, region, area, normal, offset);
+      for (std::size_t c = 0; c < of_body.size(); ++c) {
+        if (!(area[c] > 0.0)) continue;
+        e.ids.push_back(ps.id[of_body[c]]);
+        e.force.push_back(force_of(area[c], normal[c]));
+        e.offset.push_back(offset[c] / area[c]);
       }
-      // Nominal face area of the particle: its domain's extent across the face (unit thickness in 2D).
-      double area = 1.0;
-      for (int a = 0; a < Dim - (named ? 1 : 0); ++a)
+    }
+  };
+
+  for (std::size_t i = 0; i < s.loads.size(); ++i) {
+    const auto& load = s.loads[i];
+    const int body = body_index(load.body);
+    Entry e{{}, {}, {}, TimeFunction(load.function), false};
+    if (!is_axis_face(load.face)) {
+      // A named surface: the particles preprocess tagged within one lattice spacing of it share
+      // its samples, so the load carries the surface's exact length or area at any angle.
+      const int k = surface_index(s, load.face, "loads/" + std::to_string(i) + "/face");
+      const bool pressure = load.type == "pressure";
+      Vec<Dim> tr;
+      for (int a = 0; a < Dim; ++a) tr[a] = load.value[a];
+      add_named(e, k, body, load.region, [&](std::size_t p) { return ps.body[p] == body; },
+                [&](double area, const Vec<Dim>& an) -> Vec<Dim> {
+                  return pressure ? Vec<Dim>(-load.value[0] * an) : Vec<Dim>(area * tr);  // a pressure pushes inward
+                });
+      entries_.push_back(std::move(e));
+      continue;
+    }
+    // An axis face (x_min ... z_max): the body's surface layer facing that way, loaded at the
+    // particles' face points with their nominal face area (exact: the layer follows the lattice).
+    const int f = face_index(load.face), axis = f / 2;
+    const double outward = f % 2 == 0 ? -1.0 : 1.0;
+    for (std::size_t p = 0; p < ps.size(); ++p) {
+      if (ps.body[p] != body || !(ps.faces[p] & (1u << f)) || !in_region(p, load.region)) continue;
+      double area = 1.0;  // the particle domain's extent across the face (unit thickness in 2D)
+      for (int a = 0; a < Dim; ++a)
         if (a != axis) area *= 2.0 * ps.l[p][a];
       Vec<Dim> force = Vec<Dim>::Zero();
       if (load.type == "pressure") force[axis] = -outward * load.value[0] * area;  // pushes inward
       else
         for (int a = 0; a < Dim; ++a) force[a] = load.value[a] * area;
       Vec<Dim> offset = Vec<Dim>::Zero();
-      if (!named) offset[axis] = outward * ps.l[p][axis];
+      offset[axis] = outward * ps.l[p][axis];
       e.ids.push_back(ps.id[p]);
       e.force.push_back(force);
       e.offset.push_back(offset);
     }
+    entries_.push_back(std::move(e));
+  }
+
+  // Prescribed pore pressure p on a boundary: -p A n on the saturated particles at it, split
+  // between the phases by porosity when applied (for_each_force's `split`).
+  for (std::size_t i = 0; i < s.boundaries.size(); ++i) {
+    const auto& b = s.boundaries[i];
+    if (!b.fluid || *b.fluid != scene::FluidBc::pressure) continue;
+    const std::string where = "boundaries/" + std::to_string(i) + "/fluid";
+    if (!ps.two_phase())
+      throw std::runtime_error(where + ": a prescribed pore pressure needs pore fluid on the particles; this "
+                               "formulation's particles carry none");
+    Entry e{{}, {}, {}, TimeFunction(scene::TimeFunction{}), true};
+    auto wet = [&](std::size_t p) { return ps.fluid_material[p] >= 0; };
+    if (!is_axis_face(b.on)) {
+      const int k = surface_index(s, b.on, "boundaries/" + std::to_string(i) + "/on");
+      add_named(e, k, -1, std::nullopt, wet, [&](double, const Vec<Dim>& an) -> Vec<Dim> { return -b.fluid_value * an; });
+    } else {
+      // The saturated particles whose face point lies on the grid face.
+      const int f = face_index(b.on), axis = f / 2;
+      const double outward = f % 2 == 0 ? -1.0 : 1.0;
+      const double plane = f % 2 == 0 ? g.min()[axis] : g.max()[axis];
+      for (std::size_t p = 0; p < ps.size(); ++p) {
+        if (!wet(p) || !(ps.faces[p] & (1u << f))) continue;
+        if (std::abs(ps.x0[p][axis] + outward * ps.l[p][axis] - plane) > 0.5 * ps.l[p][axis]) continue;
+        double area = 1.0;
+        for (int a = 0; a < Dim; ++a)
+          if (a != axis) area *= 2.0 * ps.l[p][a];
+        Vec<Dim> force = Vec<Dim>::Zero(), offset = Vec<Dim>::Zero();
+        force[axis] = -outward * b.fluid_value * area;
+        offset[axis] = outward * ps.l[p][axis];
+        e.ids.push_back(ps.id[p]);
+        e.force.push_back(force);
+        e.offset.push_back(offset);
+      }
+    }
+    if (e.ids.empty())
+      throw std::runtime_error(where + ": no saturated particle lies on \"" + b.on +
+                               "\", so the prescribed pore pressure would act on nothing");
     entries_.push_back(std::move(e));
   }
 }

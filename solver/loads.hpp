@@ -26,7 +26,7 @@ class TimeFunction {
   std::unique_ptr<Impl> impl_;
 };
 
-/// Solid boundary conditions on the grid's faces, applied to nodal velocities.
+/// Solid boundary conditions on the grid's faces and on named surfaces, applied to nodal velocities.
 template <int Dim>
 class GridBoundary {
  public:
@@ -36,53 +36,78 @@ class GridBoundary {
     scene::SolidBc kind;
     double mu;  // Coulomb coefficient (friction)
   };
-  GridBoundary(const scene::Scene& s);
-  explicit GridBoundary(std::vector<Face> faces) : faces_(std::move(faces)) {}
+  /// A node under a condition on a named surface: the grid node nearest to one or more of the
+  /// surface's samples, with their area-weighted mean outward normal (pointing into the wall).
+  struct SurfaceNode {
+    std::size_t node;
+    Vec<Dim> n;
+    scene::SolidBc kind;
+    double mu;
+  };
+  GridBoundary(const scene::Scene& s, const Grid<Dim>& g, const SurfaceSamples<Dim>& samples);
+  explicit GridBoundary(std::vector<Face> faces, std::vector<SurfaceNode> nodes = {})
+      : faces_(std::move(faces)), nodes_(std::move(nodes)) {}
   /// Conditions on the pore-fluid velocity: an `impermeable` face stops the fluid's normal
-  /// velocity (a roller for the fluid); `drained` leaves it free (p = 0 is the natural condition).
-  /// A face without a `fluid` entry is impermeable where its solid condition is fixed, roller or
-  /// friction, drained where it is free; grid faces not listed at all are drained.
-  static GridBoundary fluid(const scene::Scene& s);
-  /// Enforces the conditions on v for nodes of `box` that lie on a constrained face. Friction acts
-  /// only when `with_friction` (on the end-of-step velocity; the start-of-step velocity only gets
-  /// the kinematic constraints).
-  void apply(const Grid<Dim>& g, const NodeBox<Dim>& box, std::vector<Vec<Dim>>& v,
-             bool with_friction) const;
+  /// velocity (a roller for the fluid); `drained` and `pressure` leave it free (p = 0 is the
+  /// natural condition; a prescribed pressure is a load, ParticleLoads). A face without a `fluid`
+  /// entry is impermeable where its solid condition is fixed, roller or friction, drained where
+  /// it is free; grid faces not listed at all are drained.
+  static GridBoundary fluid(const scene::Scene& s, const Grid<Dim>& g, const SurfaceSamples<Dim>& samples);
+  /// Enforces the conditions on v for nodes of `box` that lie on a constrained face, and on the
+  /// nodes of named surfaces. Friction acts only when `with_friction` (on the end-of-step
+  /// velocity; the start-of-step velocity only gets the kinematic constraints).
+  void apply(const Grid<Dim>& g, const NodeBox<Dim>& box, std::vector<Vec<Dim>>& v, bool with_friction) const;
   const std::vector<Face>& faces() const { return faces_; }
+  const std::vector<SurfaceNode>& surface_nodes() const { return nodes_; }
 
  private:
   std::vector<Face> faces_;
+  std::vector<SurfaceNode> nodes_;
 };
 
-/// Tractions and pressures on bodies' faces, as forces on the face particles.
+/// Tractions and pressures on bodies' faces, as forces on the face particles; and prescribed pore
+/// pressures (`boundaries[].fluid: "pressure"`), as the same kind of force shared between the
+/// phases by porosity (`split`).
 template <int Dim>
 class ParticleLoads {
  public:
-  ParticleLoads(const scene::Scene& s, const ParticleSet<Dim>& ps);
-  /// Calls fn(p, f_p(t), face offset) for every loaded particle (serial; few particles). The
-  /// force acts on the body's surface, at x_p + offset (the particle domain's face point), so
-  /// formulations evaluate the shape functions there rather than at the particle centre: a
-  /// traction then loads the nodes of the surface, not those around the first particle row.
-  /// `index_of_id` maps particle ids to current indices (State::index_of_id).
+  ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, const ParticleSet<Dim>& ps,
+                const SurfaceSamples<Dim>& samples);
+  /// Calls fn(p, f_p(t), face offset, split) for every loaded particle (serial; few particles).
+  /// The force acts on the body's surface, at x_p + offset (the particle domain's face point, or
+  /// the centroid of the named surface's share), so formulations evaluate the shape functions
+  /// there rather than at the particle centre: a traction then loads the nodes of the surface,
+  /// not those around the first particle row. `split`: a prescribed pore pressure p on the
+  /// mixture's surface, f = -p A n; the solid takes (1 - n_p) f and the fluid n_p f (the boundary
+  /// terms of sigma_s = sigma' - (1 - n) p I and sigma_f = -n p I). `index_of_id` maps particle
+  /// ids to current indices (State::index_of_id).
   template <class Fn>
   void for_each_force(double t, const std::vector<int>& index_of_id, Fn&& fn) const {
     for (const auto& e : entries_) {
       const double scale = e.fn(t);
       if (scale == 0.0) continue;
       for (std::size_t k = 0; k < e.ids.size(); ++k)
-        fn(index_of_id[e.ids[k]], (scale * e.force[k]).eval(), e.offset[k]);
+        fn(index_of_id[e.ids[k]], (scale * e.force[k]).eval(), e.offset[k], e.split);
     }
   }
   std::size_t count() const { return entries_.size(); }
-  /// Number of particles a load acts on (to report and test the tagging).
+  /// Number of particles a load acts on (to report and test the tagging); loads come first, in
+  /// scene order, then prescribed pore pressures in the order of `boundaries`.
   std::size_t particles(std::size_t load) const { return entries_[load].ids.size(); }
+  /// Sum of the load's forces at f(t) = 1 (N, or N/m in 2D).
+  Vec<Dim> resultant(std::size_t load) const {
+    Vec<Dim> r = Vec<Dim>::Zero();
+    for (const auto& f : entries_[load].force) r += f;
+    return r;
+  }
 
  private:
   struct Entry {
     std::vector<std::int64_t> ids;  // particle ids (stable under reordering)
     std::vector<Vec<Dim>> force;   // N (N/m in 2D) at f(t) = 1
-    std::vector<Vec<Dim>> offset;  // m, from the particle centre to its face point
+    std::vector<Vec<Dim>> offset;  // m, from the particle centre to its point of action
     TimeFunction fn;
+    bool split = false;  // a prescribed pore pressure: shared between the phases by porosity
   };
   std::vector<Entry> entries_;
 };
@@ -92,6 +117,8 @@ template <int Dim, int S>
 struct FaceForce {
   shape::ShapeData<Dim, S> sd;  // shape functions at the face point
   Vec<Dim> f;                   // N (N/m in 2D)
+  int p;                        // particle index
+  bool split;                   // shared between solid and fluid by porosity (ParticleLoads)
 };
 
 /// The loads' forces at time t with their shape data, and the active node box grown to hold them
@@ -101,8 +128,8 @@ void collect_face_forces(const Grid<Dim>& g, const ParticleLoads<Dim>& loads, co
                          const std::vector<int>& index_of_id, double t, NodeBox<Dim>& box,
                          std::vector<FaceForce<Dim, Shape::support>>& out) {
   out.clear();
-  loads.for_each_force(t, index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>& offset) {
-    FaceForce<Dim, Shape::support> ff{{}, f_p};
+  loads.for_each_force(t, index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>& offset, bool split) {
+    FaceForce<Dim, Shape::support> ff{{}, f_p, p, split};
     const Vec<Dim> x_face = (ps.x[p] + offset).cwiseMax(g.min()).cwiseMin(g.max());
     shape::evaluate<Shape>(g, x_face, Vec<Dim>::Zero().eval(), ff.sd);
     for (int a = 0; a < Dim; ++a) {

@@ -70,6 +70,13 @@ class Runner {
     const fs::path particles = dir_ / "particles" / "solid.vtu";
     state_.solid = particles_from_cloud<Dim>(scene::read_vtu(particles.string()), particles.string());
     state_.index_ids();
+    const fs::path surfaces = dir_ / "particles" / "surfaces.vtu";
+    if (!scene::surface_bit_names(scene_).empty()) {
+      if (!fs::exists(surfaces))
+        throw std::runtime_error(surfaces.string() + " is missing: the scene names surfaces in boundaries or loads; "
+                                 "run swmpm preprocess again");
+      state_.surfaces = surface_samples_from_cloud<Dim>(scene::read_vtu(surfaces.string()), surfaces.string());
+    }
     auto formulation = make_formulation<Dim>(scene_, state_);
     threads_ = omp_get_max_threads();
 

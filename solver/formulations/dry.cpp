@@ -29,8 +29,8 @@ class Dry final : public Formulation<Dim> {
  public:
   Dry(const scene::Scene& s, const State<Dim>& state)
       : grid_(make_grid<Dim>(s, Shape::degree, Shape::bspline)),
-        bcs_(s),
-        loads_(s, state.solid),
+        bcs_(s, grid_, state.surfaces),
+        loads_(s, grid_, state.solid, state.surfaces),
         flip_(s.solver.flip),
         damping_(s.solver.damping),
         materials_(make_materials<Dim>(s)),
@@ -120,7 +120,7 @@ class Dry final : public Formulation<Dim> {
     Vec<Dim> b;
     for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
     double power = fixed_order_sum(ps.size(), [&](std::size_t p) { return ps.m[p] * b.dot(ps.v[p]); });
-    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&) { power += f_p.dot(ps.v[p]); });
+    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool) { power += f_p.dot(ps.v[p]); });
     return power;
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }

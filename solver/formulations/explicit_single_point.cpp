@@ -48,9 +48,9 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
  public:
   ExplicitSinglePoint(const scene::Scene& s, const State<Dim>& state)
       : grid_(make_grid<Dim>(s, Shape::degree, Shape::bspline)),
-        bcs_solid_(s),
-        bcs_fluid_(GridBoundary<Dim>::fluid(s)),
-        loads_(s, state.solid),
+        bcs_solid_(s, grid_, state.surfaces),
+        bcs_fluid_(GridBoundary<Dim>::fluid(s, grid_, state.surfaces)),
+        loads_(s, grid_, state.solid, state.surfaces),
         flip_(s.solver.flip),
         damping_(s.solver.damping),
         smoothing_(s.solver.stabilisation.strain_smoothing),
@@ -118,8 +118,14 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     lap("shape functions");
 
     scatter_both_phases(ps, b);                                                          // (2)
-    for (const auto& ff : face_forces_)
-      shape::for_each_node(grid_, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) { solid_.acc[i].f += N * ff.f; });
+    for (const auto& ff : face_forces_) {
+      // A prescribed pore pressure (split) loads both phases, (1 - n) and n of -p A n.
+      const double to_fluid = ff.split ? ps.n[ff.p] : 0.0;
+      shape::for_each_node(grid_, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) {
+        solid_.acc[i].f += (N * (1.0 - to_fluid)) * ff.f;
+        fluid_.acc[i].f += (N * to_fluid) * ff.f;
+      });
+    }
     lap("p2g");
 
     update_grid(dt);                                                                     // (3)
@@ -189,7 +195,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     Vec<Dim> b;
     for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
     double power = fixed_order_sum(ps.size(), [&](std::size_t p) { return b.dot(ps.m[p] * ps.v[p] + ps.m_f[p] * ps.v_f[p]); });
-    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&) { power += f_p.dot(ps.v[p]); });
+    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool split) {
+      const double n = split ? ps.n[p] : 0.0;
+      power += f_p.dot((1.0 - n) * ps.v[p] + n * ps.v_f[p]);
+    });
     return power;
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }

@@ -105,6 +105,19 @@ class Grid {
       if (a == Dim) return;
     }
   }
+  /// The node nearest to x along each axis (x clamped into the grid).
+  std::array<int, Dim> nearest_node(const Vec<Dim>& x) const {
+    std::array<int, Dim> ijk;
+    for (int a = 0; a < Dim; ++a) {
+      const auto& nx = axis_[a].node_x;
+      const auto it = std::lower_bound(nx.begin(), nx.end(), x[a]);
+      int i = static_cast<int>(it - nx.begin());
+      if (i >= static_cast<int>(nx.size())) i = static_cast<int>(nx.size()) - 1;
+      else if (i > 0 && x[a] - nx[i - 1] < nx[i] - x[a]) i -= 1;
+      ijk[a] = i;
+    }
+    return ijk;
+  }
   /// The whole node range.
   NodeBox<Dim> all_nodes() const {
     NodeBox<Dim> b;

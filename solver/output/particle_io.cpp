@@ -116,6 +116,30 @@ scene::PointCloud particles_to_cloud(const ParticleSet<Dim>& ps) {
   return c;
 }
 
+template <int Dim>
+SurfaceSamples<Dim> surface_samples_from_cloud(const scene::PointCloud& c, const std::string& where) {
+  SurfaceSamples<Dim> out;
+  const auto& surface = c.get("surface", where);
+  const auto& body = c.get("body", where);
+  const auto& normal = c.get("normal", where);
+  const auto& area = c.get("area", where);
+  for (std::size_t j = 0; j < c.size(); ++j) {
+    Vec<Dim> x, n;
+    for (int a = 0; a < Dim; ++a) {
+      x[a] = c.points[j][a];
+      n[a] = normal.values[3 * j + a];
+    }
+    out.surface.push_back(static_cast<int>(surface.values[j]));
+    out.body.push_back(static_cast<int>(body.values[j]));
+    out.x.push_back(x);
+    out.normal.push_back(n);
+    out.area.push_back(area.values[j]);
+  }
+  return out;
+}
+
+template SurfaceSamples<2> surface_samples_from_cloud<2>(const scene::PointCloud&, const std::string&);
+template SurfaceSamples<3> surface_samples_from_cloud<3>(const scene::PointCloud&, const std::string&);
 template ParticleSet<2> particles_from_cloud<2>(const scene::PointCloud&, const std::string&);
 template ParticleSet<3> particles_from_cloud<3>(const scene::PointCloud&, const std::string&);
 template scene::PointCloud particles_to_cloud<2>(const ParticleSet<2>&);

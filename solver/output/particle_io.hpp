@@ -11,6 +11,10 @@ namespace swmpm {
 template <int Dim>
 ParticleSet<Dim> particles_from_cloud(const scene::PointCloud& c, const std::string& where);
 
+/// Reads particles/surfaces.vtu (preprocess's named-surface samples).
+template <int Dim>
+SurfaceSamples<Dim> surface_samples_from_cloud(const scene::PointCloud& c, const std::string& where);
+
 /// A frame: the seeded arrays plus displacement, stress invariants and J.
 template <int Dim>
 scene::PointCloud particles_to_cloud(const ParticleSet<Dim>& ps);

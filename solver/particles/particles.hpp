@@ -100,6 +100,20 @@ struct ParticleSet {
 /// Every field is gathered through one scratch buffer (the size of the largest field), kept across
 /// calls. Used to keep particles in the scatter schedule's order, so that the transfers walk
 /// memory sequentially.
+/// Samples of the named surfaces the scene refers to (particles/surfaces.vtu, written by
+/// preprocess): points on each surface, at t = 0, with the outward unit normal and the length (2D)
+/// or area (3D) each stands for. Loads on a named surface share their force among the tagged
+/// particles by these samples; boundary conditions on one constrain the grid nodes nearest them.
+template <int Dim>
+struct SurfaceSamples {
+  std::vector<int> surface;  // k: the surface of face bit kFirstSurfaceBit + k
+  std::vector<int> body;     // the body whose geometry the sample belongs to
+  std::vector<Vec<Dim>> x;       // m
+  std::vector<Vec<Dim>> normal;  // outward unit normal (out of `body`)
+  std::vector<double> area;      // m (2D, per metre of thickness) or m^2
+  std::size_t size() const { return x.size(); }
+};
+
 template <int Dim>
 class Reorder {
  public:
