@@ -1,10 +1,17 @@
 #!/usr/bin/env python3
-"""Dry-MPM speed benchmark (issue: core). Writes scenes for a 2D GIMP linear-elastic box of
-~10k, 100k and 1M particles and a 3D box, runs `swmpm preprocess` + `swmpm solve --threads N`, and
-tabulates microseconds per particle-step and memory per particle from each run.json.
+"""MPM speed benchmark (issues: core, explicit-single-point). Writes scenes for a 2D GIMP
+linear-elastic box of ~10k, 100k and 1M particles and a 3D box, runs `swmpm preprocess` +
+`swmpm solve --threads N`, and tabulates microseconds per particle-step and memory per particle
+from each run.json.
+
+--formulation dry (default): a dry box under gravity.
+--formulation explicit-single-point: the same box saturated (n = 0.3, k = 1e-3 m/s, K_f = 2.2 GPa),
+  geostatic and hydrostatic initial state, impermeable sides and base, with the scene's default
+  stabilisation (cell-average strain smoothing + node-based MFVP, linear basis); dt = 0.4 of the
+  undrained P-wave limit.
 
 Usage: bench/dry_box.py [--swmpm build/app/swmpm] [--sizes 10k,100k,1M,3d] [--threads 1,2]
-                        [--steps 100] [--out bench/results/dry-box-<date>.md]
+                        [--steps 100] [--formulation dry] [--out bench/results/dry-box-<date>.md]
 Memory per particle = (peak RSS of the run - peak RSS of a 1-particle run) / particles.
 """
 import argparse, datetime, json, os, platform, subprocess, sys, tempfile
@@ -16,7 +23,7 @@ SIZES = {  # name: (dimension, cells per side along x/y(/z), extent)
     "3d-100k": (3, 30, 3.0),
 }
 
-def scene(dim, n, extent, steps):
+def scene(dim, n, extent, steps, formulation="dry"):
     h = extent / n
     lo = [0.0] * dim
     hi_grid = [extent + 2 * h] * dim
@@ -27,6 +34,28 @@ def scene(dim, n, extent, steps):
     E, rho = 1.0e7, 2000.0
     c = ((E / rho)) ** 0.5
     dt = 0.4 * h / c
+    if formulation == "explicit-single-point":
+        nu, n_por, Kf, rho_s, rho_w = 0.3, 0.3, 2.2e9, 2650.0, 1000.0
+        M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+        rho_sat = (1 - n_por) * rho_s + n_por * rho_w
+        dt = 0.4 * h / ((M + Kf / n_por) / rho_sat) ** 0.5
+        return {
+            "name": f"bench-esp-{dim}d-{n}",
+            "dimension": dim,
+            "formulation": formulation,
+            "gravity": g,
+            "grid": {"cell_size": h, "min": lo, "max": hi_grid, "shape_function": "gimp"},
+            "materials": [{"name": "soil", "model": "linear-elastic", "grain_density": rho_s, "porosity": n_por,
+                           "youngs_modulus": E, "poisson_ratio": nu, "hydraulic_conductivity": 1e-3},
+                          {"name": "water", "model": "fluid", "density": rho_w, "bulk_modulus": Kf}],
+            "bodies": [{"name": "box", "geometry": {"type": "box", "min": lo, "max": hi_body},
+                        "solid": "soil", "fluid": "water", "particles_per_cell": 2,
+                        "initial": {"stress": "geostatic", "k0": 0.5, "pore_pressure": "hydrostatic"}}],
+            "boundaries": [{"on": f, "solid": "roller", "fluid": "impermeable"} for f in faces]
+                          + [{"on": "y_min", "solid": "fixed", "fluid": "impermeable"}],
+            "time": {"end": steps * dt * (1 - 1e-9), "dt": dt},
+            "output": {"interval": 0.0},
+        }
     return {
         "name": f"bench-{dim}d-{n}",
         "dimension": dim,
@@ -59,16 +88,17 @@ def main():
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--out", default="")
+    ap.add_argument("--formulation", default="dry", choices=["dry", "explicit-single-point"])
     ap.add_argument("--repeat", type=int, default=3,
                     help="runs per case; the table gives the fastest (timing noise on shared machines is additive) and the median")
     a = ap.parse_args()
     work = tempfile.mkdtemp(prefix="swmpm-bench-")
-    base = run(a.swmpm, scene(2, 2, 0.2, 2), 1, work)["peak_memory_bytes"]
+    base = run(a.swmpm, scene(2, 2, 0.2, 2, a.formulation), 1, work)["peak_memory_bytes"]
     rows = []
     for name in a.sizes.split(","):
         dim, n, ext = SIZES[name]
         for t in [int(x) for x in a.threads.split(",")]:
-            runs = [run(a.swmpm, scene(dim, n, ext, a.steps), t, work) for _ in range(a.repeat)]
+            runs = [run(a.swmpm, scene(dim, n, ext, a.steps, a.formulation), t, work) for _ in range(a.repeat)]
             runs.sort(key=lambda r: r["loop_us_per_particle_step"])
             r = runs[0]
             median = runs[len(runs) // 2]["loop_us_per_particle_step"]
@@ -84,9 +114,10 @@ def main():
                 cpu = line.split(":", 1)[1].strip(); break
     except OSError:
         pass
-    lines = [f"# Dry MPM speed — {datetime.date.today()}", "",
+    title = "Dry MPM" if a.formulation == "dry" else a.formulation
+    lines = [f"# {title} speed — {datetime.date.today()}", "",
              f"Machine: {cpu}, {os.cpu_count()} cores, {platform.platform()}.",
-             f"Scene: GIMP, linear-elastic box under gravity, 2x2(x2) particles per cell, MUSL, {a.steps} steps. "
+             f"Scene: GIMP, linear-elastic box under gravity ({a.formulation}), 2x2(x2) particles per cell, MUSL, {a.steps} steps. "
              f"Time per particle-step is the time loop's (run.json loop_us_per_particle_step); best and median of {a.repeat} runs.", "",
              "| case | dim | particles | threads | steps | us per particle-step, best | median | bytes per particle |",
              "|---|---|---|---|---|---|---|---|"]

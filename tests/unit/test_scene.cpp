@@ -185,7 +185,7 @@ TEST(Scene, Valid2DParsesToTypedValues) {
   EXPECT_EQ(s.solver.kinematics, "finite-strain");
   EXPECT_EQ(s.solver.checkpoint_every, 50);
   EXPECT_TRUE(s.solver.stabilisation.strain_smoothing);
-  EXPECT_EQ(s.solver.stabilisation.pressure, "none");
+  EXPECT_EQ(s.solver.stabilisation.pressure, "mfvp-linear");  // the explicit-single-point default
   EXPECT_TRUE(s.has_fluid());
   EXPECT_EQ(s.source_file, "t.json");
 }
