@@ -220,22 +220,36 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       const PoreFluid& pf = pore_[ps.material[p]];
       const double V = ps.V[p], n = ps.n[p];
       const Mat3 s = to_matrix(ps.sigma[p]);
-      const MatD<Dim> Vs = V * s.template topLeftCorner<Dim, Dim>();
       const double ps_solid = (1.0 - n) * ps.p[p] * V, ps_fluid = n * ps.p[p] * V;  // N m (N in 2D per m)
+      // f_s = N m_s b - A grad N with A = V sigma' - (1 - n) p V I;  f_f = N m_f b + n p V grad N
+      const MatD<Dim> A = V * s.template topLeftCorner<Dim, Dim>() - ps_solid * MatD<Dim>::Identity();
       const double m_s = ps.m[p], m_f = ps.m_f[p];
       const Vec<Dim> mv_s = m_s * ps.v[p], mv_f = m_f * ps.v_f[p];
+      const Vec<Dim> mb_s = m_s * b, mb_f = m_f * b;
       const bool wet = ps.fluid_material[p] >= 0;  // dry points (no pore fluid) carry no drag
       const double drag = wet ? n * n * pf.rho_f * g_earth / pf.k * V : 0.0;
-      shape::for_each_node(grid_, sp, [&](std::size_t i, double N, const Vec<Dim>& dN) {
-        auto& ns = solid_.acc[i];
-        auto& nf = fluid_.acc[i];
-        ns.m += N * m_s;
-        ns.mv += N * mv_s;
-        ns.f += N * m_s * b - Vs * dN + ps_solid * dN;
-        nf.m += N * m_f;
-        nf.mv += N * mv_f;
-        nf.f += N * m_f * b + ps_fluid * dN;
-        drag_[i] += N * drag;
+      // Row-factored (shape::for_each_row): grad N = (dwx[a] w_r, wx[a] g_r).
+      shape::for_each_row(grid_, sp, [&](std::size_t row, double w_r, const Vec<Dim - 1>& g_r) {
+        const Vec<Dim> fs_w = w_r * mb_s - A.template rightCols<Dim - 1>() * g_r, fs_dw = -w_r * A.col(0);
+        Vec<Dim> ff_w = w_r * mb_f;
+        ff_w.template tail<Dim - 1>() += ps_fluid * g_r;
+        const double ff_dw = w_r * ps_fluid;  // along x only
+        const double ms_r = w_r * m_s, mf_r = w_r * m_f, d_r = w_r * drag;
+        const Vec<Dim> mvs_r = w_r * mv_s, mvf_r = w_r * mv_f;
+        for (int a = 0; a < S; ++a) {
+          const std::size_t i = row + a;
+          const double wx = sp.w[0][a], dwx = sp.dw[0][a];
+          auto& ns = solid_.acc[i];
+          auto& nf = fluid_.acc[i];
+          ns.m += wx * ms_r;
+          ns.mv += wx * mvs_r;
+          ns.f += wx * fs_w + dwx * fs_dw;
+          nf.m += wx * mf_r;
+          nf.mv += wx * mvf_r;
+          nf.f += wx * ff_w;
+          nf.f[0] += dwx * ff_dw;
+          drag_[i] += wx * d_r;
+        }
       });
     });
   }
@@ -416,60 +430,83 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     constexpr int NQ = basis_size<Order>();
     using VecQ = Eigen::Matrix<double, NQ, 1>;
     using MatQ = Eigen::Matrix<double, NQ, NQ>;
+    // Per node one block: the upper triangle of H_I packed row by row, then the right-hand side
+    // (replaced by the coefficients a_I after the solve) — one cache line or two per node.
+    constexpr int NH = NQ * (NQ + 1) / 2, NB = NH + NQ;
     const std::size_t nodes = grid_.num_nodes();
-    if (mfvp_H_.size() != nodes * NQ * NQ) {
-      mfvp_H_.assign(nodes * NQ * NQ, 0.0);
-      mfvp_b_.assign(nodes * NQ, 0.0);
-    }
-    auto H = [&](std::size_t i) { return Eigen::Map<MatQ>(mfvp_H_.data() + i * NQ * NQ); };
-    auto rhs = [&](std::size_t i) { return Eigen::Map<VecQ>(mfvp_b_.data() + i * NQ); };
-    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
-      H(i).setZero();
-      rhs(i).setZero();
-    });
-    const double inv_h = 1.0 / grid_.h();
-    auto offset = [&](int p, std::size_t i) {
-      std::array<int, Dim> ijk;
-      std::size_t r = i;
-      for (int a = 0; a < Dim; ++a) {
-        ijk[a] = static_cast<int>(r % grid_.nodes_per_axis()[a]);
-        r /= grid_.nodes_per_axis()[a];
-      }
-      return Vec<Dim>((ps.x[p] - grid_.node_position(ijk)) * inv_h);
-    };
+    if (mfvp_.size() != nodes * NB) mfvp_.assign(nodes * NB, 0.0);
+    auto block = [&](std::size_t i) { return mfvp_.data() + i * NB; };
+    grid_.for_each_node(box_, [&](std::size_t i, const auto&) { std::fill_n(block(i), NB, 0.0); });
     // Positions are those the shape data were evaluated at (start of step) for Order 0; for
     // higher orders the current positions serve as the quadrature points of the projection.
     schedule_.run([&](int p) {
-      const double V = ps.V[p];
-      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+      const double V = ps.V[p], pdot = pdot_[p];
+      for_each_node_offset(sd_[p], ps.x[p], [&](std::size_t i, double N, const Vec<Dim>& d) {
         if (N <= 0.0) return;
-        const VecQ q = basis<Order>(offset(p, i));
-        H(i).noalias() += (N * V) * q * q.transpose();
-        rhs(i).noalias() += (N * V * pdot_[p]) * q;
+        const VecQ q = basis<Order>(d);
+        double* blk = block(i);
+        const double NV = N * V;
+        for (int r = 0, k = 0; r < NQ; ++r) {
+          const double s_r = NV * q[r];
+          for (int c = r; c < NQ; ++c) blk[k++] += s_r * q[c];
+        }
+        const double NVp = N * V * pdot;
+        for (int r = 0; r < NQ; ++r) blk[NH + r] += NVp * q[r];
       });
     });
     grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
-      if (!(H(i)(0, 0) > 0.0)) return;
-      VecQ a = VecQ::Zero();
+      double* blk = block(i);
+      if (!(blk[0] > 0.0)) return;
+      Eigen::Map<VecQ> rhs(blk + NH);
       if constexpr (NQ > 1) {
-        Eigen::LDLT<MatQ> ldlt(H(i));
+        MatQ H;
+        for (int r = 0, k = 0; r < NQ; ++r)
+          for (int c = r; c < NQ; ++c) H(r, c) = H(c, r) = blk[k++];
+        Eigen::LDLT<MatQ> ldlt(H);
         const double cond = ldlt.vectorD().cwiseAbs().minCoeff() / ldlt.vectorD().cwiseAbs().maxCoeff();
-        if (ldlt.info() == Eigen::Success && cond > 1e-8) a = ldlt.solve(rhs(i));
-        else a[0] = rhs(i)[0] / H(i)(0, 0);  // too few particles for the basis: constant
+        VecQ a = VecQ::Zero();
+        if (ldlt.info() == Eigen::Success && cond > 1e-8) a = ldlt.solve(rhs);
+        else a[0] = rhs[0] / blk[0];  // too few particles for the basis: constant
+        rhs = a;  // the node's coefficients
       } else {
-        a[0] = rhs(i)[0] / H(i)(0, 0);
+        rhs[0] /= blk[0];
       }
-      rhs(i) = a;  // the node's coefficients
     });
     const long n = static_cast<long>(ps.size());
 #pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       double value = 0.0;
-      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
-        if (N <= 0.0 || !(H(i)(0, 0) > 0.0)) return;
-        value += N * basis<Order>(offset(static_cast<int>(p), i)).dot(rhs(i));
+      for_each_node_offset(sd_[p], ps.x[p], [&](std::size_t i, double N, const Vec<Dim>& d) {
+        const double* blk = block(i);
+        if (N <= 0.0 || !(blk[0] > 0.0)) return;
+        value += N * basis<Order>(d).dot(Eigen::Map<const VecQ>(blk + NH));
       });
       pdot_[p] = value;
+    }
+  }
+
+  /// Calls fn(node, N_Ip, d) over a particle's nodes in for_each_node's order, with d = (x - x_I) / h
+  /// from per-axis offsets (no flat-index decoding per node).
+  template <class Fn>
+  void for_each_node_offset(const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x, Fn&& fn) const {
+    const double inv_h = 1.0 / grid_.h();
+    double off[Dim][S];
+    for (int a = 0; a < Dim; ++a)
+      for (int k = 0; k < S; ++k) off[a][k] = (x[a] - grid_.axis(a).node_x[sd.base[a] + k]) * inv_h;
+    const auto& nn = grid_.nodes_per_axis();
+    if constexpr (Dim == 2) {
+      for (int b = 0; b < S; ++b) {
+        const std::size_t row = static_cast<std::size_t>(sd.base[1] + b) * nn[0] + sd.base[0];
+        for (int a = 0; a < S; ++a) fn(row + a, sd.w[0][a] * sd.w[1][b], Vec<2>(off[0][a], off[1][b]));
+      }
+    } else {
+      for (int c = 0; c < S; ++c)
+        for (int b = 0; b < S; ++b) {
+          const std::size_t row =
+              (static_cast<std::size_t>(sd.base[2] + c) * nn[1] + (sd.base[1] + b)) * nn[0] + sd.base[0];
+          const double wbc = sd.w[1][b] * sd.w[2][c];
+          for (int a = 0; a < S; ++a) fn(row + a, sd.w[0][a] * wbc, Vec<3>(off[0][a], off[1][b], off[2][c]));
+        }
     }
   }
 
@@ -505,7 +542,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::vector<PoreFluid> pore_;  // per solid material
   NodeFields<Dim> solid_, fluid_;
   std::vector<double> drag_;                         // per node
-  std::vector<double> mfvp_H_, mfvp_b_;              // per node: H_I and rhs / coefficients a_I
+  std::vector<double> mfvp_;                         // per node: packed H_I, then rhs / coefficients a_I
   std::vector<double> div_f_, pdot_;                 // per particle
   std::vector<std::size_t> cell_;                    // per particle
   std::vector<std::array<double, 4>> cell_sum_;      // per cell: sum m div v_s, sum m_s, sum m_f div v_f, sum m_f
