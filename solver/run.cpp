@@ -58,6 +58,10 @@ std::size_t peak_memory_bytes() {
   return static_cast<std::size_t>(ru.ru_maxrss) * 1024;  // ru_maxrss is in KiB on Linux
 }
 
+constexpr int kEnergyCheckEvery = 10;     // steps between energy checks (also at checkpoints and frames)
+constexpr double kEnergyFactor = 10.0;     // allowed growth over the initial energy plus the external work
+constexpr double kEnergyFloor = 1e-9;      // J (J/m in 2D): below this nothing is judged
+
 template <int Dim>
 class Runner {
  public:
@@ -124,6 +128,27 @@ class Runner {
     monitors.record(state_, *formulation, work);
     next_monitor = scene_.output.monitor_interval;
 
+    // Energy check: kinetic + stored energy can grow only by the work of gravity and loads
+    // (damping, drag and plasticity dissipate). A step that creates energy many times over is an
+    // instability even when every value stays finite (a run may blow up and ring down again).
+    // The external work is integrated every step (trapezoidal rule; the end-of-step power is the
+    // next step's start power, one pass over the particles per step).
+    const double energy0 = formulation->kinetic_energy(state_) + formulation->strain_energy(state_);
+    double work_max = 0.0;
+    double power = formulation->external_power(state_, StepContext{0.0, 0.0, gravity_at(0.0)});
+    auto energy_created = [&]() -> bool {
+      const double e = formulation->kinetic_energy(state_) + formulation->strain_energy(state_);
+      const double allowed = kEnergyFactor * (energy0 + work_max) + kEnergyFloor;
+      if (e <= allowed) return false;
+      std::ostringstream os;
+      os << "energy check: kinetic + stored energy " << e << " J at t = " << state_.time << " s (step "
+         << state_.step << ") is more than " << kEnergyFactor << " x (initial energy " << energy0
+         << " J + largest external work so far " << work_max
+         << " J): the scheme is creating energy, i.e. it is unstable (reduce dt or time.cfl)";
+      diagnosis = os.str();
+      return true;
+    };
+
     while (state_.time < end - eps_t) {
       if (g_interrupted) {
         status = "interrupted";
@@ -135,25 +160,34 @@ class Runner {
       } else {
         dt = *scene_.time.dt;
       }
+      const double dt_stable = dt;  // before the last step is shortened to land on time.end
       dt = std::min(dt, end - state_.time);
       StepContext ctx{state_.time, dt, gravity_at(state_.time)};
-      const double p0 = monitors.needs_external_work() ? formulation->external_power(state_, ctx) : 0.0;
       formulation->step(state_, ctx);
       if (!state_.health.ok()) {
         status = "diverged";
         diagnosis = describe_failure(last_good, ctx);
         break;
       }
-      if (monitors.needs_external_work()) {  // trapezoidal rule on the power of external forces
+      {  // trapezoidal rule on the power of external forces
         StepContext end_ctx{state_.time + dt, dt, gravity_at(state_.time + dt)};
-        work += 0.5 * dt * (p0 + formulation->external_power(state_, end_ctx));
+        const double power_end = formulation->external_power(state_, end_ctx);
+        work += 0.5 * dt * (power + power_end);
+        power = power_end;
+        work_max = std::max(work_max, work);
       }
       state_.time += dt;
       ++state_.step;
-      dt_min = std::min(dt_min, dt);
-      dt_max = std::max(dt_max, dt);
+      dt_min = std::min(dt_min, dt_stable);
+      dt_max = std::max(dt_max, dt_stable);
 
-      if (state_.step % scene_.solver.checkpoint_every == 0) {
+      const bool checkpoint = state_.step % scene_.solver.checkpoint_every == 0;
+      const bool frame_due = state_.time >= next_frame - eps_t || state_.time >= end - eps_t;
+      if ((state_.step % kEnergyCheckEvery == 0 || checkpoint || frame_due) && energy_created()) {
+        status = "diverged";
+        break;
+      }
+      if (checkpoint) {
         last_good.copy_state_from(state_.solid);  // reuses capacity: no allocation after the first copy
         last_good_time = state_.time;
       }
@@ -163,7 +197,7 @@ class Runner {
         if (scene_.output.monitor_interval > 0)
           while (next_monitor <= state_.time + eps_t) next_monitor += scene_.output.monitor_interval;
       }
-      if (state_.time >= next_frame - eps_t || state_.time >= end - eps_t) {
+      if (frame_due) {
         write_frame(state_.time);
         if (scene_.output.interval > 0)
           while (next_frame <= state_.time + eps_t) next_frame += scene_.output.interval;

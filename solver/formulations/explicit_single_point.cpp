@@ -185,9 +185,15 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       return 0.5 * (ps.m[p] * ps.v[p].squaredNorm() + ps.m_f[p] * ps.v_f[p].squaredNorm());
     });
   }
+  /// Stored energy: the skeleton's elastic energy plus the pore fluid's, n p^2 / (2 K_f) V (the
+  /// mixture's storage modulus K_f / n of eq. 9).
   double strain_energy(const State<Dim>& st) const override {
-    return fixed_order_sum(st.solid.size(), [&](std::size_t p) {
-      return materials_[st.solid.material[p]]->strain_energy(st.solid, static_cast<int>(p));
+    const auto& ps = st.solid;
+    return fixed_order_sum(ps.size(), [&](std::size_t p) {
+      const double fluid = ps.fluid_material[p] >= 0
+                               ? ps.n[p] * ps.p[p] * ps.p[p] / (2.0 * pore_[ps.material[p]].K_f) * ps.V[p]
+                               : 0.0;
+      return materials_[ps.material[p]]->strain_energy(ps, static_cast<int>(p)) + fluid;
     });
   }
   double external_power(const State<Dim>& st, const StepContext& ctx) const override {
