@@ -18,7 +18,7 @@ namespace {
 
 /// What `swmpm postprocess RUN_DIR COMMAND ...` was given; one struct for every command.
 struct PostArgs {
-  std::string command;  // history | profile | compare | plot | report; empty: plot
+  std::string command;  // history | profile | frame | compare | plot | report; empty: plot
   std::string point, from, to, phase = "solid", quantity, method = "nearest", out;
   double radius = 0.0, time = 0.0;  // m, s
   int points = 50;
@@ -62,6 +62,10 @@ void add_postprocess_commands(CLI::App* post, PostArgs& a, bool& quiet) {
   profile->add_option("--points", a.points, "Points along the segment (default 50)")->check(CLI::Range(2, 1000000));
   phase(profile);
   sampling(profile);
+  auto* frame = command("frame", "Every particle of the frame nearest a time (CSV: x,y[,z], then every array)");
+  frame->add_option("--time", a.time, "Time [s]; the nearest frame is used")->required();
+  frame->add_option("--out", a.out, "CSV file (default: standard output)");
+  phase(frame);
 
   auto* compare = command("compare", "Error norms of a monitor against a reference curve");
   compare->add_option("--monitor", a.monitor, "Column of monitors.csv, MONITOR.QUANTITY")->required();
@@ -123,6 +127,11 @@ int postprocess_command(const std::string& run_dir, const PostArgs& a, bool quie
       const auto r = post::profile(run_dir, o, &note);
       // Standard output may be the CSV itself: the frame note then goes to stderr.
       if (!quiet) (a.out.empty() ? std::cerr : std::cout) << "profile: " << note << "\n";
+      emit_csv(r, a, quiet);
+    } else if (cmd == "frame") {
+      std::string note;
+      const auto r = post::frame_table(run_dir, a.time, a.phase, &note);
+      if (!quiet) (a.out.empty() ? std::cerr : std::cout) << "frame: " << note << "\n";
       emit_csv(r, a, quiet);
     } else if (cmd == "compare") {
       const auto c = post::compare(run_dir, a.monitor, a.reference, a.reference_column);

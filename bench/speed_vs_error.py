@@ -9,11 +9,23 @@ Error metrics:
                 M = E (1-nu) / ((1+nu)(1-2nu)); rho, g, H, E, nu are read from the scene.
   --reference CSV --monitor NAME.QUANTITY
                 the relative L2 error of `swmpm postprocess RUN compare` (any scene).
+  --metric terzaghi
+                Terzaghi consolidation (examples/terzaghi, explicit-single-point): RMS over all
+                particles of p/p0 - the series at the end time (z = depth of the particle's initial
+                position below the top, Tv = c_v t / H^2, c_v = k / (gamma_w (1/E_oed + n/K_f)));
+                p0, E, nu, n, k, K_f, rho_w, H are read from the scene.
+  --metric large-strain
+                1D large-strain consolidation (examples/large-strain-consolidation): signed relative
+                error of the top particle's settlement at the end time against the constant-k
+                finite-volume reference (examples/large-strain-consolidation/reference.py, for the
+                scene's E, q, k, K_f and the particle's initial height); the RMS of p/q against the
+                same reference is reported alongside.
 
 Usage:
   bench/speed_vs_error.py --swmpm build/app/swmpm [--scene examples/elastic-column/scene.json]
       [--cell-sizes 0.1,0.05,0.025,0.0125] [--ppc 1,2,3] [--shapes linear,gimp,bspline2]
-      [--cfl 0.5,0.25 | --dt 2e-4,1e-4] [--threads 1] [--end T]
+      [--cfl 0.5,0.25 | --dt 2e-4,1e-4] [--threads 1] [--end T] [--max-wall SECONDS]
+      [--metric column|terzaghi|large-strain]
       [--set materials.0.youngs_modulus=1e8 ...] [--reference REF.csv --monitor NAME.Q]
       --table OUT.md --chart OUT.png
 
@@ -24,6 +36,8 @@ the cheapest run under 1 % error; the PNG is a log-log chart of wall time agains
 series per shape function (gnuplot).
 """
 import argparse, json, math, os, re, subprocess, sys, tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def floats(text):
@@ -81,7 +95,12 @@ def run_case(a, base, shape, h, ppc, step, work):
     rd = os.path.join(work, name)
     subprocess.run([a.swmpm, "-q", "preprocess", path, "-o", rd], check=True)
     # A diverged run (exit 3) still writes run.json; its status is reported and the row skipped.
-    subprocess.run([a.swmpm, "-q", "solve", rd, "--threads", str(a.threads)], check=False)
+    # A run longer than --max-wall seconds is stopped and reported the same way.
+    try:
+        subprocess.run([a.swmpm, "-q", "solve", rd, "--threads", str(a.threads)], check=False,
+                       timeout=a.max_wall or None)
+    except subprocess.TimeoutExpired:
+        return s, rd, {"status": f"stopped after --max-wall {a.max_wall:g} s"}
     if not os.path.exists(os.path.join(rd, "run.json")):
         sys.exit(f"{name}: swmpm solve wrote no run.json (see {rd})")
     with open(os.path.join(rd, "run.json")) as f:
@@ -103,6 +122,94 @@ def column_error(scene, rd, h, ppc):
         rows = [l.strip().split(",") for l in f if l.strip() and not l.startswith("#")]
     col = rows[0].index("top.displacement_y")
     return (-float(rows[-1][col]) - exact) / exact
+
+
+def last_frame(swmpm, rd):
+    """The run's last frame as (time, {column: [values]}), read through VTK by
+    `swmpm postprocess RUN frame` (columns x, y[, z], then every array: displacement_y, pore_pressure, ...)."""
+    out = subprocess.run([swmpm, "-q", "postprocess", rd, "frame", "--time", "1e300"], check=True,
+                         capture_output=True, text=True).stdout
+    lines = out.splitlines()
+    t = float(re.search(r"the frame at t = ([0-9.eE+-]+) s", "\n".join(l for l in lines if l.startswith("#"))).group(1))
+    data = [l for l in lines if l and not l.startswith("#")]
+    names = data[0].split(",")
+    cols = {n: [] for n in names}
+    for l in data[1:]:
+        for n, v in zip(names, l.split(",")):
+            cols[n].append(float(v))
+    return t, cols
+
+
+def saturated_column(scene):
+    """Parameters of a saturated 1D column scene (examples/terzaghi, examples/large-strain-consolidation)."""
+    solid = next(m for m in scene["materials"] if m["model"] != "fluid")
+    fluid = next(m for m in scene["materials"] if m["model"] == "fluid")
+    body = scene["bodies"][0]
+    geo = body["geometry"]
+    return dict(E=solid["youngs_modulus"], nu=solid["poisson_ratio"], n=solid["porosity"],
+                k=solid["hydraulic_conductivity"], rho_w=fluid["density"], K_f=fluid["bulk_modulus"],
+                p0=body["initial"]["pore_pressure"], q=-scene["loads"][0]["value"][1],
+                H=geo["max"][1] - geo["min"][1], y_min=geo["min"][1], end=scene["time"]["end"])
+
+
+def terzaghi_series(z, H, Tv, terms=200):
+    total = 0.0
+    for m in range(terms):
+        M = (2 * m + 1) * math.pi / 2
+        total += 2.0 / M * math.sin(M * z / H) * math.exp(-M * M * Tv)
+    return total
+
+
+def terzaghi_error(swmpm, scene, rd):
+    """RMS over the particles of p/p0 - Terzaghi's series at the last frame."""
+    c = saturated_column(scene)
+    E_oed = c["E"] * (1 - c["nu"]) / ((1 + c["nu"]) * (1 - 2 * c["nu"]))
+    c_v = c["k"] / (c["rho_w"] * 9.81 * (1.0 / E_oed + c["n"] / c["K_f"]))
+    t, f = last_frame(swmpm, rd)
+    Tv = c_v * t / c["H"] ** 2
+    err2 = 0.0
+    for y, uy, p in zip(f["y"], f["displacement_y"], f["pore_pressure"]):
+        z = c["H"] - (y - uy - c["y_min"])
+        err2 += (p / c["p0"] - terzaghi_series(z, c["H"], Tv)) ** 2
+    return math.sqrt(err2 / len(f["y"]))
+
+
+_large_strain_cache = {}
+
+
+def large_strain_error(swmpm, scene, rd):
+    """Signed relative error of the top particle's settlement and RMS of p/q, both against the
+    constant-k finite-volume reference at the run's end time."""
+    sys.path.insert(0, os.path.join(HERE, "..", "examples", "large-strain-consolidation"))
+    import reference  # noqa: E402
+    c = saturated_column(scene)
+    t, f = last_frame(swmpm, rd)
+    key = (c["E"], c["q"], c["k"], c["K_f"], c["n"], c["H"], round(t, 9))
+    if key not in _large_strain_cache:
+        N = 400
+        _, _, prof = reference.solve(H=c["H"], E=c["E"], q=c["q"], n0=c["n"], k0=c["k"], Kf=c["K_f"], times=[t], N=N)[0]
+        _large_strain_cache[key] = prof
+    prof = _large_strain_cache[key]
+    N = len(prof)
+    da = c["H"] / N
+    strain = [1.0 - math.exp((p - c["q"]) / c["E"]) for p in prof]  # 1 - J per cell
+
+    def settlement(a):  # of the point at initial height a above the base
+        m = min(N, int(a / da))
+        s = sum(strain[:m]) * da
+        return s + (strain[m] * (a - m * da) if m < N else 0.0)
+
+    def pressure(a):
+        return prof[min(N - 1, int(a / da))]
+
+    y, uy = f["y"], f["displacement_y"]
+    top = max(range(len(y)), key=lambda i: y[i] - uy[i])
+    a_top = y[top] - uy[top] - c["y_min"]
+    exact = settlement(a_top)
+    err = (-uy[top] - exact) / exact
+    rms = math.sqrt(sum((p - pressure(yi - ui - c["y_min"])) ** 2 for yi, ui, p in
+                        zip(y, uy, f["pore_pressure"])) / len(y)) / c["q"]
+    return err, rms
 
 
 def compare_error(a, rd):
@@ -138,7 +245,7 @@ def chart(rows, path, metric, title):
             plots.append(f"'{data}' using 1:2 with points pt {[7, 5, 9, 11][k % 4]} ps 1.6 title '{shape}'")
         # The x range always shows the 1 % line, with room for its label.
         errors = [max(abs(r["error"]), 1e-7) for r in rows]
-        x_lo = 10 ** math.floor(math.log10(min(errors)))
+        x_lo = min(10 ** math.floor(math.log10(min(errors))), 0.003)
         x_hi = max(0.03, 10 ** math.ceil(math.log10(max(errors))))
         script = f"""set terminal pngcairo size 900,600 font 'Sans,11' noenhanced
 set output '{path}'
@@ -169,8 +276,12 @@ def main():
     ap.add_argument("--dt", default="", help="fixed time steps [s] (comma-separated)")
     ap.add_argument("--end", type=float, default=0.0, help="end time [s] (default: the scene's)")
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--max-wall", type=float, default=0.0,
+                    help="stop a run after this many seconds of wall time and report it as not completed (0: no limit)")
     ap.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
                     help="change the scene before the sweep, e.g. materials.0.youngs_modulus=1e8 (repeatable)")
+    ap.add_argument("--metric", choices=["column", "terzaghi", "large-strain"], default="column",
+                    help="error measure (ignored with --reference): see the module docstring")
     ap.add_argument("--reference", default="", help="reference CSV for `postprocess compare`")
     ap.add_argument("--monitor", default="", help="NAME.QUANTITY compared with --reference")
     ap.add_argument("--table", required=True, help="Markdown output")
@@ -185,10 +296,13 @@ def main():
     for assignment in a.set:
         apply_set(base, assignment)
     steps = [("cfl", v) for v in floats(a.cfl)] + [("dt", v) for v in floats(a.dt)] or [None]
-    metric = f"relative L2 of {a.monitor}" if a.reference else "top settlement, relative"
+    metric = (f"relative L2 of {a.monitor}" if a.reference else
+              {"column": "top settlement, relative", "terzaghi": "RMS of p/p0 vs series",
+               "large-strain": "top settlement vs constant-k reference, relative"}[a.metric])
+    signed = not a.reference and a.metric != "terzaghi"
     work = a.work or tempfile.mkdtemp(prefix="swmpm-speed-error-")
     os.makedirs(work, exist_ok=True)
-    rows = []
+    rows, skipped = [], []
     for shape in a.shapes.split(","):
         for h in floats(a.cell_sizes):
             for ppc in [int(x) for x in a.ppc.split(",")]:
@@ -196,23 +310,39 @@ def main():
                     scene, rd, rj = run_case(a, base, shape, h, ppc, step, work)
                     if rj["status"] != "completed":
                         print(f"{shape} h={h:g} ppc={ppc}: {rj['status']}", flush=True)
+                        skipped.append(f"{shape}, h = {h:g} m, {ppc} ppc: {rj['status']}"
+                                       + (f" at t = {rj['end_time']:.4g} s" if "end_time" in rj else ""))
                         continue
-                    err = compare_error(a, rd) if a.reference else column_error(scene, rd, h, ppc)
+                    extra = None
+                    if a.reference:
+                        err = compare_error(a, rd)
+                    elif a.metric == "terzaghi":
+                        err = terzaghi_error(a.swmpm, scene, rd)
+                    elif a.metric == "large-strain":
+                        err, extra = large_strain_error(a.swmpm, scene, rd)
+                    else:
+                        err = column_error(scene, rd, h, ppc)
                     rows.append(dict(shape=shape, h=h, ppc=ppc, step=step, dt=rj["dt"], particles=sum(rj["particles"].values()),
-                                     steps=rj["steps"], wall=rj["wall_seconds"], error=err))
+                                     steps=rj["steps"], wall=rj["wall_seconds"], error=err, extra=extra))
                     print(f"{shape:9s} h={h:<7g} ppc={ppc} dt={rj['dt']:.3g} particles={rows[-1]['particles']:6d} "
-                          f"steps={rj['steps']:6d} wall={rj['wall_seconds']:.3f} s error={100 * err:+.3f} %", flush=True)
+                          f"steps={rj['steps']:6d} wall={rj['wall_seconds']:.3f} s error={100 * err:{'+' if signed else ''}.3f} %"
+                          + (f" p RMS={100 * extra:.2f} %" if extra is not None else ""), flush=True)
 
     changes = "".join(f", `{x}`" for x in a.set)
     lines = [f"Scene `{a.scene}` ({base.get('name', '')}{changes}), end time {a.end or base['time']['end']} s, "
              f"{a.threads} thread(s), frames only at the start and the end. Error: {metric}"
-             + (" (signed: run − exact)." if not a.reference else "."), "",
-             "| cells (h) [m] | ppc | shape | dt [s] | particles | steps | wall [s] | error |",
-             "|---|---|---|---|---|---|---|---|"]
-    sign = "" if a.reference else "+"  # a relative L2 error has no sign
+             + (" (signed: run − exact)." if signed else "."), ""]
+    has_extra = any(r["extra"] is not None for r in rows)
+    lines += ["| cells (h) [m] | ppc | shape | dt [s] | particles | steps | wall [s] | error |"
+              + (" RMS of p/q |" if has_extra else ""),
+              "|---|---|---|---|---|---|---|---|" + ("---|" if has_extra else "")]
+    sign = "+" if signed else ""  # an RMS or relative L2 error has no sign
     for r in rows:
         lines.append(f"| {r['h']:g} | {r['ppc']} | {r['shape']} | {r['dt']:.3g} | {r['particles']} | {r['steps']} | "
-                     f"{r['wall']:.3f} | {100 * r['error']:{sign}.3f} % |")
+                     f"{r['wall']:.3f} | {100 * r['error']:{sign}.3f} % |"
+                     + (f" {100 * r['extra']:.2f} % |" if has_extra else ""))
+    if skipped:
+        lines += ["", "Not completed (no row above): " + "; ".join(skipped) + "."]
     lines += ["", "Observed order of |error| with cell size (least-squares slope of log|error| against log h):", "",
               "| shape | ppc | order |", "|---|---|---|"]
     for shape in a.shapes.split(","):
@@ -228,13 +358,16 @@ def main():
     if good:
         best = min(good, key=lambda r: r["wall"])
         lines.append(f"Cheapest run within 1 %: {best['shape']}, h = {best['h']:g} m, {best['ppc']} ppc, "
-                     f"{best['wall']:.3f} s wall, error {100 * best['error']:+.3f} %.")
+                     f"{best['wall']:.3f} s wall, error {100 * best['error']:{sign}.3f} %.")
     else:
         lines.append("No run is within 1 %.")
     text = "\n".join(lines) + "\n"
     with open(a.table, "w") as f:
         f.write(text)
-    chart(rows, a.chart, metric, a.title)
+    if rows:
+        chart(rows, a.chart, metric, a.title)
+    else:
+        print(f"no completed run: no chart written to {a.chart}")
     print(text)
     print(f"table: {a.table}\nchart: {a.chart}")
 

@@ -150,4 +150,42 @@ CsvResult profile(const std::string& run_dir, const ProfileOptions& o, std::stri
   return r;
 }
 
+CsvResult frame_table(const std::string& run_dir, double time, const std::string& phase, std::string* frame_note) {
+  const RunSeries series(run_dir, phase);
+  const int dim = series.dimension();
+  const std::size_t k = series.nearest_frame(time);
+  const Frame& f = series.frames()[k];
+  const auto frame = series.load(k);
+  const std::string note = "the frame at t = " + num(f.time) + " s, the nearest to --time " + num(time) + " (" + f.path +
+                           ", frame " + std::to_string(k + 1) + " of " + std::to_string(series.frames().size()) + ")";
+  if (frame_note) *frame_note = note;
+  CsvResult r;
+  r.comments.push_back("swmpm frame: run " + run_dir + ", phase " + phase + ", every particle");
+  r.comments.push_back(note);
+  static const char* axes[] = {"x", "y", "z"};
+  static const char* voigt[] = {"xx", "yy", "zz", "xy", "yz", "xz"};
+  for (int a = 0; a < dim; ++a) r.names.push_back(axes[a]);
+  for (const auto& arr : frame.arrays) {
+    if (arr.components == 1) r.names.push_back(arr.name);
+    else if (arr.components == 3)
+      for (int a = 0; a < dim; ++a) r.names.push_back(arr.name + "_" + axes[a]);
+    else if (arr.components == 6)
+      for (const char* c : voigt) r.names.push_back(arr.name + "_" + c);
+    else
+      for (int c = 0; c < arr.components; ++c) r.names.push_back(arr.name + "_" + std::to_string(c));
+  }
+  r.rows.reserve(frame.size());
+  for (std::size_t p = 0; p < frame.size(); ++p) {
+    std::vector<double> row;
+    row.reserve(r.names.size());
+    for (int a = 0; a < dim; ++a) row.push_back(frame.points[p][a]);
+    for (const auto& arr : frame.arrays) {
+      const int shown = arr.components == 3 ? dim : arr.components;
+      for (int c = 0; c < shown; ++c) row.push_back(arr.values[p * static_cast<std::size_t>(arr.components) + c]);
+    }
+    r.rows.push_back(std::move(row));
+  }
+  return r;
+}
+
 }  // namespace swmpm::post

@@ -154,6 +154,13 @@ struct ProfileOptions {
 /// Columns s, x, y[, z], <quantity>; `frame_note` receives which frame was used.
 CsvResult profile(const std::string& run_dir, const ProfileOptions& o, std::string* frame_note = nullptr);
 
+/// Every particle of the frame nearest `time` (phase solid or fluid), read through VTK: columns
+/// x, y[, z], then every array of the frame, vectors as NAME_x, NAME_y[, NAME_z] (2D frames drop
+/// the z component), symmetric tensors as NAME_xx, NAME_yy, NAME_zz, NAME_xy, NAME_yz, NAME_xz.
+/// For scripts that want whole fields (bench/speed_vs_error.py) without parsing VTU themselves.
+CsvResult frame_table(const std::string& run_dir, double time, const std::string& phase,
+                      std::string* frame_note = nullptr);
+
 // ---------------------------------------------------------------------------------------------
 // compare (compare.cpp)
 

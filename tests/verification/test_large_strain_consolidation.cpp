@@ -1,0 +1,170 @@
+// A2 (seed 000 §4.1.2): 1D large-strain consolidation (Xie & Leo) with explicit-single-point.
+// Column 0.1 x 1.0 m as A1 (cells 0.05 m, 2x2 particles per cell, GIMP, mfvp-constant + strain
+// smoothing), E = 1 MPa, nu = 0, n0 = 0.3, rho_s = 2650, rho_w = 1000; initial p0 = q = 200 kPa,
+// sigma' = 0, a 200 kPa traction on top, no gravity; sides roller + impermeable, base fixed +
+// impermeable, top drained.
+//
+// Final settlement (derivation: examples/large-strain-consolidation/README.md): with the Cauchy
+// effective stress linear in the logarithmic strain, sigma'_yy = E ln J — what `linear-elastic`
+// (Jaumann rate) integrates to in 1D strain — the end state sigma'_yy = -q gives
+// J = exp(-q/E) and S_inf = H (1 - exp(-q/E)) = 0.18127 m (Xie & Leo; the paper's numerical value
+// 0.1815). The `hencky` model is linear in log strain for the Kirchhoff stress (sigma = tau / J),
+// so its end state solves E ln J = -q J: J = 0.84459, S_inf = 0.15541 m.
+//
+// The settlement is measured at the top surface: the top particle's displacement plus the
+// compression of the half particle above it, u + (1 - J) l_y (l_y its initial half-size).
+//
+// What these runs change from the paper, to fit the default suite: K_f softened to 2.2e7 Pa
+// (c_v = k / (gamma_w (m_v + n/K_f)) drops by 1.35 %, the CFL step rises 10x) and k = 1e-3 m/s
+// instead of 1e-4 (ten times faster consolidation); the final settlement depends on neither. The
+// paper's own parameters (K_f = 2.2 GPa, k = 1e-4, dt = 1e-5) diverge at t = 4.25 s today:
+// examples/large-strain-consolidation/README.md, "Known solver problems".
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "scene/scene.hpp"
+#include "support/consolidation_reference.hpp"
+#include "support/run_helpers.hpp"
+
+namespace {
+
+using nlohmann::json;
+
+constexpr double H = 1.0, E = 1.0e6, q = 2.0e5;
+
+json scene_a2(const std::string& model, double K_f, double k, double end, double interval, double dt) {
+  json s = json::parse(R"json({
+    "name": "large-strain-consolidation", "dimension": 2, "formulation": "explicit-single-point",
+    "grid": { "cell_size": 0.05, "min": [0.0, 0.0], "max": [0.1, 1.1], "shape_function": "gimp" },
+    "materials": [
+      { "name": "soil", "model": "linear-elastic", "grain_density": 2650.0, "porosity": 0.3,
+        "youngs_modulus": 1.0e6, "poisson_ratio": 0.0, "hydraulic_conductivity": 1.0e-4 },
+      { "name": "water", "model": "fluid", "density": 1000.0, "bulk_modulus": 2.2e9 } ],
+    "bodies": [ { "name": "column", "geometry": { "type": "box", "min": [0.0, 0.0], "max": [0.1, 1.0] },
+                  "solid": "soil", "fluid": "water", "particles_per_cell": 2, "initial": { "pore_pressure": 2.0e5 } } ],
+    "boundaries": [ { "on": "x_min", "solid": "roller", "fluid": "impermeable" },
+                    { "on": "x_max", "solid": "roller", "fluid": "impermeable" },
+                    { "on": "y_min", "solid": "fixed", "fluid": "impermeable" } ],
+    "loads": [ { "type": "traction", "body": "column", "face": "y_max", "value": [0.0, -2.0e5] } ],
+    "time": { "end": 1.0, "dt": "auto", "cfl": 0.5 },
+    "output": { "interval": 1.0, "monitors": [
+      { "name": "top", "at": [0.05, 1.0], "phase": "solid", "quantities": ["displacement_y"] } ] },
+    "solver": { "stabilisation": { "pressure": "mfvp-constant", "strain_smoothing": true } }
+  })json");
+  s["materials"][0]["model"] = model;
+  s["materials"][0]["hydraulic_conductivity"] = k;
+  s["materials"][1]["bulk_modulus"] = K_f;
+  s["time"]["end"] = end;
+  if (dt > 0.0) s["time"] = {{"end", end}, {"dt", dt}};
+  s["output"]["interval"] = interval;
+  return s;
+}
+
+/// Top-surface settlement of a frame (mean over the top row of particles) and that row's initial height.
+struct Top {
+  double settlement, a;
+};
+Top top_surface(const swmpm::scene::PointCloud& f, const std::string& where) {
+  const auto& d = f.get("displacement", where).values;
+  const auto& J = f.get("volume_ratio", where).values;
+  const auto& l = f.get("half_size", where).values;
+  double a_top = -1.0;
+  for (std::size_t p = 0; p < f.size(); ++p) a_top = std::max(a_top, f.points[p][1] - d[3 * p + 1]);
+  double sum = 0.0;
+  int count = 0;
+  for (std::size_t p = 0; p < f.size(); ++p) {
+    if (f.points[p][1] - d[3 * p + 1] < a_top - 1e-9) continue;
+    sum += -d[3 * p + 1] + (1.0 - J[p]) * l[3 * p + 1];
+    ++count;
+  }
+  return {sum / count, a_top};
+}
+
+double final_settlement(const std::string& run) {
+  return top_surface(swmpm::testing::last_frame(run), "last frame").settlement;
+}
+
+}  // namespace
+
+TEST(LargeStrainConsolidation, A2FinalSettlementMatchesLogStrainClosedForm) {
+  // Softened K_f, k = 1e-3: U = 99.7 % of the constant-k reference at 16 s; 2 s frames.
+  const std::string run = swmpm::testing::run_scene(scene_a2("linear-elastic", 2.2e7, 1.0e-3, 16.0, 2.0, 0.0), "a2-final");
+  const auto entries = swmpm::scene::read_pvd(run + "/output/results.pvd");
+  ASSERT_GE(entries.size(), 3u);
+  const double S_inf = H * (1.0 - std::exp(-q / E));  // 0.181269 m
+  const double S = final_settlement(run);
+  const double S_before =
+      top_surface(swmpm::scene::read_vtu(run + "/output/" + entries[entries.size() - 2].file), "frame").settlement;
+  std::printf("A2 final settlement %.5f m (at %.1f s: %.5f m) vs H(1 - exp(-q/E)) = %.5f m: %+.2f %%\n", S,
+              entries[entries.size() - 2].time, S_before, S_inf, 100.0 * (S / S_inf - 1.0));
+  // Measured 2026-11-22: 0.18080 m, -0.26 % (the small-strain end state, qH/E = 0.2 m, would be +10 %;
+  // hencky's 0.1554 m -14 %). 10-16 s wall on the shared 2-vCPU machine.
+  EXPECT_NEAR(S / S_inf, 1.0, 0.02);
+  EXPECT_LT(std::abs(S - S_before) / S_inf, 0.005);  // settled: measured 0.08 % over the last 2 s
+}
+
+TEST(LargeStrainConsolidation, HenckyKirchhoffLawSettlesToItsOwnClosedForm) {
+  // `hencky`: Kirchhoff stress tau = E ln J, sigma = tau / J. End state E ln J = -q J (Newton).
+  double J = 0.85;
+  for (int i = 0; i < 50; ++i) J -= (E * std::log(J) + q * J) / (E / J + q);
+  const double S_hencky = H * (1.0 - J);  // 0.15541 m
+  const std::string run = swmpm::testing::run_scene(scene_a2("hencky", 2.2e7, 1.0e-3, 16.0, 16.0, 0.0), "a2-hencky");
+  const double S = final_settlement(run);
+  std::printf("A2 with hencky: final settlement %.5f m vs H(1 - J), E ln J = -q J: %.5f m (%+.2f %%); "
+              "log-strain Cauchy law %.5f m\n",
+              S, S_hencky, 100.0 * (S / S_hencky - 1.0), H * (1.0 - std::exp(-q / E)));
+  // Measured 2026-11-22: 0.15538 m, -0.03 %. 13-14 s wall.
+  EXPECT_NEAR(S / S_hencky, 1.0, 0.02);
+}
+
+// The settlement history and the pore pressures against the constant-k reference (the same
+// continuum model solved by finite volumes, tests/support/consolidation_reference.hpp). Disabled:
+// explicit-single-point misses both in large strain (measured 2026-11-22, this test: settlement
+// +26.5 % at 1 s, +27.7 ... +30.6 % from 2 to 10 s; RMS of (p - p_ref)/q 10 % at 1 s growing to 93 %
+// at 10 s — a pore-pressure pattern alternating between pairs of particle rows that never decays;
+// the same run diverges at t = 130 s). Causes and the evidence: examples/large-strain-consolidation/
+// README.md, "Known solver problems". Run with --gtest_also_run_disabled_tests.
+TEST(LargeStrainConsolidation, DISABLED_A2SettlementHistoryAndPorePressureMatchConstantK) {
+  const std::string run = swmpm::testing::run_scene(scene_a2("linear-elastic", 2.2e7, 1.0e-4, 10.0, 1.0, 0.0), "a2-history");
+  const auto entries = swmpm::scene::read_pvd(run + "/output/results.pvd");
+  std::vector<double> times;
+  for (const auto& e : entries)
+    if (e.time > 0.0) times.push_back(e.time);
+  swmpm::testing::LargeStrainColumn ref;
+  ref.K_f = 2.2e7;
+  const auto profiles = ref.solve(times);
+  std::size_t k = 0;
+  for (const auto& e : entries) {
+    if (e.time <= 0.0) continue;
+    const auto f = swmpm::scene::read_vtu(run + "/output/" + e.file);
+    const auto& prof = profiles[k++];
+    const Top top = top_surface(f, e.file);
+    const double S_ref = ref.settlement(prof, H);
+    const auto& pp = f.get("pore_pressure", e.file).values;
+    const auto& d = f.get("displacement", e.file).values;
+    double err2 = 0.0;
+    for (std::size_t p = 0; p < f.size(); ++p)
+      err2 += std::pow((pp[p] - ref.pressure(prof, f.points[p][1] - d[3 * p + 1])) / q, 2);
+    const double rms = std::sqrt(err2 / static_cast<double>(f.size()));
+    std::printf("A2 t = %5.2f s: settlement %.5f m vs %.5f m (%+.2f %%), RMS of (p - p_ref)/q = %.4f\n", e.time,
+                top.settlement, S_ref, 100.0 * (top.settlement / S_ref - 1.0), rms);
+    EXPECT_NEAR(top.settlement / S_ref, 1.0, 0.03) << "t = " << e.time;
+    EXPECT_LT(rms, 0.05) << "t = " << e.time;
+  }
+}
+
+// The paper's parameters (K_f = 2.2 GPa, k = 1e-4 m/s, dt = 1e-5 s, 300 s: 3e7 steps, ~25-30 min on
+// one core). Disabled: it diverges at t = 4.25 s today (a top particle is thrown out of the grid
+// at 4 m/s; with k = 1e-3 at 0.64 s) — examples/large-strain-consolidation/README.md, "Known
+// solver problems". Run with --gtest_also_run_disabled_tests once those are fixed.
+TEST(LargeStrainConsolidationSlow, DISABLED_A2PaperParametersFinalSettlement) {
+  const std::string run = swmpm::testing::run_scene(scene_a2("linear-elastic", 2.2e9, 1.0e-4, 300.0, 10.0, 1.0e-5), "a2-paper");
+  const double S_inf = H * (1.0 - std::exp(-q / E));
+  const double S = final_settlement(run);
+  std::printf("A2 (paper parameters): final settlement %.5f m vs %.5f m: %+.2f %%\n", S, S_inf, 100.0 * (S / S_inf - 1.0));
+  EXPECT_NEAR(S / S_inf, 1.0, 0.02);
+}
