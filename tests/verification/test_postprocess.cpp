@@ -185,6 +185,33 @@ TEST(Postprocess, ProfileOfVerticalStress) {
   EXPECT_NE(r.out.find("1.3,\n"), std::string::npos) << r.out;
 }
 
+// `frame`: every particle of one frame as CSV, read through VTK: the column's 160 particles with
+// their positions and arrays; sigma_yy against rho g (H - y0) as in the profile test.
+TEST(Postprocess, FrameTableHoldsEveryParticle) {
+  const std::string run = column_run("frame");
+  const fs::path dir = fs::path(run).parent_path();
+  const fs::path csv = dir / "frame.csv";
+  const Result r = swmpm_cmd("postprocess " + run + " frame --time 1 --out " + csv.string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("t = 1 s"), std::string::npos) << "says which frame: " << r.out;
+  const auto t = swmpm::post::read_csv(csv.string());
+  ASSERT_EQ(t.columns[0].size(), 160u);
+  const std::vector<std::string> first{"x", "y", "id", "mass", "volume", "half_size_x", "half_size_y"};
+  ASSERT_GE(t.names.size(), first.size());
+  EXPECT_EQ(std::vector<std::string>(t.names.begin(), t.names.begin() + 7), first);
+  const auto& y = t.column("y");
+  const auto& uy = t.column("displacement_y");
+  const auto& syy = t.column("stress_yy");
+  double e2 = 0.0;
+  for (std::size_t k = 0; k < y.size(); ++k) e2 += std::pow((syy[k] - -rho * g * (H - (y[k] - uy[k]))) / (rho * g * H), 2);
+  const double rms = std::sqrt(e2 / static_cast<double>(y.size()));
+  std::printf("frame: 160 rows, sigma_yy RMS error %.3f %% of rho g H\n", 100 * rms);
+  EXPECT_LT(rms, 0.03);
+  // A fluid frame of a dry run is an error naming the phase.
+  const Result bad = swmpm_cmd("postprocess " + run + " frame --time 1 --phase fluid", dir);
+  EXPECT_NE(bad.status, 0);
+}
+
 TEST(Postprocess, CompareAgainstAnalyticSettlement) {
   const std::string run = column_run("compare");
   const fs::path dir = fs::path(run).parent_path();
