@@ -214,9 +214,11 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
 
  private:
   void clear_nodes() {
-    transfer::clear_nodes(grid_, box_, solid_);
-    transfer::clear_nodes(grid_, box_, fluid_);
-    grid_.for_each_node(box_, [&](std::size_t i, const auto&) { drag_[i] = 0.0; });
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      solid_.acc[i] = {Vec<Dim>::Zero(), Vec<Dim>::Zero(), 0.0};
+      fluid_.acc[i] = {Vec<Dim>::Zero(), Vec<Dim>::Zero(), 0.0};
+      drag_[i] = 0.0;
+    });
   }
 
   /// (2) eqs. 20-23: m_sI, m_fI, momenta, and
@@ -269,7 +271,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   void update_grid(double dt) {
     const double alpha = damping_;
     auto damp = [alpha](const Vec<Dim>& f, const Vec<Dim>& v) { return local_damping<Dim>(f, v, alpha); };
-    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       const auto& ns = solid_.acc[i];
       const auto& nf = fluid_.acc[i];
       const double ms = ns.m, mf = nf.m;
@@ -297,7 +299,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   /// (4)-(5) FLIP/PIC update of both phases' particle velocities, positions with the solid, and
   /// the MUSL remap of both momenta (one pass through the stripe schedule).
   void gather_and_remap(ParticleSet<Dim>& ps, double dt) {
-    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       solid_.acc[i].mv.setZero();
       fluid_.acc[i].mv.setZero();
     });
@@ -318,7 +320,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
         fluid_.acc[i].mv += N * mvf;
       });
     });
-    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       const auto& ns = solid_.acc[i];
       const auto& nf = fluid_.acc[i];
       solid_.v[i] = ns.m > transfer::empty_node_mass ? Vec<Dim>(ns.mv / ns.m) : Vec<Dim>::Zero();
@@ -359,19 +361,17 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   void smooth_volumetric_rates(ParticleSet<Dim>& ps) {
     const std::size_t n = ps.size();
     cell_.resize(n);
-    for (std::size_t p = 0; p < n; ++p) {  // serial: cells are shared; fixed order
-      const std::size_t c = cell_of(ps.x[p]);
-      cell_[p] = c;
-      cell_sum_[c] = {0.0, 0.0, 0.0, 0.0};
-    }
-    for (std::size_t p = 0; p < n; ++p) {
+    const long N = static_cast<long>(n);
+#pragma omp parallel for schedule(static) if (N > parallel_threshold)
+    for (long p = 0; p < N; ++p) cell_[p] = cell_of(ps.x[p]);
+    for (std::size_t p = 0; p < n; ++p) cell_sum_[cell_[p]] = {0.0, 0.0, 0.0, 0.0};
+    for (std::size_t p = 0; p < n; ++p) {  // serial: cells are shared; fixed summation order
       auto& cs = cell_sum_[cell_[p]];
       cs[0] += ps.m[p] * ps.L[p].trace();
       cs[1] += ps.m[p];
       cs[2] += ps.m_f[p] * div_f_[p];
       cs[3] += ps.m_f[p];
     }
-    const long N = static_cast<long>(n);
 #pragma omp parallel for schedule(static) if (N > parallel_threshold)
     for (long p = 0; p < N; ++p) {
       const auto& cs = cell_sum_[cell_[p]];
@@ -445,7 +445,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     const std::size_t nodes = grid_.num_nodes();
     if (mfvp_.size() != nodes * NB) mfvp_.assign(nodes * NB, 0.0);
     auto block = [&](std::size_t i) { return mfvp_.data() + i * NB; };
-    grid_.for_each_node(box_, [&](std::size_t i, const auto&) { std::fill_n(block(i), NB, 0.0); });
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { std::fill_n(block(i), NB, 0.0); });
     // Positions are those the shape data were evaluated at (start of step) for Order 0; for
     // higher orders the current positions serve as the quadrature points of the projection.
     schedule_.run([&](int p) {
@@ -463,7 +463,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
         for (int r = 0; r < NQ; ++r) blk[NH + r] += NVp * q[r];
       });
     });
-    grid_.for_each_node(box_, [&](std::size_t i, const auto&) {
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       double* blk = block(i);
       if (!(blk[0] > 0.0)) return;
       Eigen::Map<VecQ> rhs(blk + NH);

@@ -105,6 +105,22 @@ class Grid {
       if (a == Dim) return;
     }
   }
+  /// for_each_node split over threads along the last axis, for work that touches only the visited
+  /// node (per-node solves, clearing): the result does not depend on the thread count.
+  template <class Fn>
+  void parallel_for_each_node(const NodeBox<Dim>& box, Fn&& fn) const {
+    if (box.empty()) return;
+    const int lo = box.lo[Dim - 1], hi = box.hi[Dim - 1];
+    std::size_t per_slab = 1;
+    for (int a = 0; a < Dim - 1; ++a) per_slab *= static_cast<std::size_t>(box.hi[a] - box.lo[a] + 1);
+    const bool parallel = per_slab * static_cast<std::size_t>(hi - lo + 1) > 4096;
+#pragma omp parallel for schedule(static) if (parallel)
+    for (int k = lo; k <= hi; ++k) {
+      NodeBox<Dim> slab = box;
+      slab.lo[Dim - 1] = slab.hi[Dim - 1] = k;
+      for_each_node(slab, fn);
+    }
+  }
   /// The node nearest to x along each axis (x clamped into the grid).
   std::array<int, Dim> nearest_node(const Vec<Dim>& x) const {
     std::array<int, Dim> ijk;
