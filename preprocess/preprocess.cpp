@@ -288,9 +288,12 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
     if (solver.contains("stabilisation"))
       throw std::runtime_error(scene_path + ": /solver/stabilisation: the dry formulation has no pore pressure to stabilise "
                                "and F-bar is not implemented yet in this version; remove the key");
-    if (solver.contains("kinematics"))
+    bool plastic = false;  // mohr-coulomb reads solver.kinematics (finite- or small-strain)
+    for (const auto& m : s.materials) plastic = plastic || m.model == scene::MaterialModel::mohr_coulomb;
+    if (solver.contains("kinematics") && !plastic)
       throw std::runtime_error(scene_path + ": /solver/kinematics: the dry formulation's kinematics follow the material "
-                               "(linear-elastic: Jaumann rate, hencky: finite strain); remove the key");
+                               "(linear-elastic: Jaumann rate, hencky: finite strain; only mohr-coulomb reads the "
+                               "switch); remove the key");
   }
 }
 

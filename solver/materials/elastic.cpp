@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "solver/materials/material.hpp"
+#include "solver/materials/mohr_coulomb.hpp"
 
 namespace swmpm {
 namespace {
@@ -112,16 +113,18 @@ class Hencky final : public MaterialModel<Dim> {
 }  // namespace
 
 template <int Dim>
-std::unique_ptr<MaterialModel<Dim>> make_material(const scene::Material& m, const scene::Scene&) {
+std::unique_ptr<MaterialModel<Dim>> make_material(const scene::Material& m, const scene::Scene& s) {
   using scene::MaterialModel;
   switch (m.model) {
     case MaterialModel::linear_elastic:
       return std::make_unique<LinearElastic<Dim>>(Elastic::from(m.at("youngs_modulus"), m.at("poisson_ratio")));
     case MaterialModel::hencky:
       return std::make_unique<Hencky<Dim>>(Elastic::from(m.at("youngs_modulus"), m.at("poisson_ratio")));
+    case MaterialModel::mohr_coulomb:
+      return make_mohr_coulomb<Dim>(m, s);  // materials/mohr_coulomb.cpp
     default:
       throw std::runtime_error("material \"" + m.name + "\": model \"" + scene::to_string(m.model) +
-                               "\" is not implemented yet in this version (available: linear-elastic, hencky)");
+                               "\" is not implemented yet in this version (available: linear-elastic, hencky, mohr-coulomb)");
   }
 }
 
