@@ -12,7 +12,6 @@
 namespace swmpm {
 namespace {
 
-constexpr long kNoParticle = std::numeric_limits<long>::max();
 
 template <int Dim>
 class LinearElastic final : public MaterialModel<Dim> {
@@ -22,11 +21,7 @@ class LinearElastic final : public MaterialModel<Dim> {
   double p_wave_modulus() const override { return e_.p_wave(); }
 
   long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double dt) const override {
-    long bad = kNoParticle;
-    const long n = static_cast<long>(ids.size());
-#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
-    for (long k = 0; k < n; ++k) {
-      const int p = ids[k];
+    return update_each(ps, ids, [&](int p) {
       Sym& s = ps.sigma[p];
       if constexpr (Dim == 2) {
         // Plane strain written out: D in-plane, W = [[0, w], [-w, 0]], w = (L_xy - L_yx)/2.
@@ -47,9 +42,8 @@ class LinearElastic final : public MaterialModel<Dim> {
         const Mat3 rate = e_.lambda * D.trace() * Mat3::Identity() + 2.0 * e_.mu * D + W * sm - sm * W;
         s = to_voigt(sm + dt * rate);
       }
-      if (!s.allFinite()) bad = std::min(bad, static_cast<long>(p));
-    }
-    return bad == kNoParticle ? -1 : bad;
+      return true;
+    });
   }
 
   /// Complementary energy 1/2 sigma : C^-1 : sigma V (exact for linear elasticity).
@@ -73,17 +67,10 @@ class Hencky final : public MaterialModel<Dim> {
   double p_wave_modulus() const override { return e_.p_wave(); }
 
   long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double) const override {
-    long bad = kNoParticle;
-    const long n = static_cast<long>(ids.size());
-#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
-    for (long k = 0; k < n; ++k) {
-      const int p = ids[k];
+    return update_each(ps, ids, [&](int p) {
       const Mat3& F = ps.F[p];
       const double J = F.determinant();
-      if (!(J > 0.0)) {
-        bad = std::min(bad, static_cast<long>(p));
-        continue;
-      }
+      if (!(J > 0.0)) return false;
       // Kirchhoff stress tau = lambda tr(eps) I + 2 mu eps, eps = 1/2 ln(F F^T); sigma = tau / J.
       Eigen::SelfAdjointEigenSolver<Mat3> eig;
       eig.computeDirect(F * F.transpose());
@@ -92,9 +79,8 @@ class Hencky final : public MaterialModel<Dim> {
       const Eigen::Vector3d tau = e_.lambda * tr * Eigen::Vector3d::Ones() + 2.0 * e_.mu * eps;
       const Mat3& Q = eig.eigenvectors();
       ps.sigma[p] = to_voigt(Q * (tau / J).asDiagonal() * Q.transpose());
-      if (!ps.sigma[p].allFinite()) bad = std::min(bad, static_cast<long>(p));
-    }
-    return bad == kNoParticle ? -1 : bad;
+      return true;
+    });
   }
 
   /// Stored energy psi = mu eps:eps + lambda/2 tr(eps)^2 per reference volume, times V0.

@@ -8,6 +8,8 @@
 // non-finite stress), or -1.
 #pragma once
 
+#include <algorithm>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -28,6 +30,22 @@ class MaterialModel {
   /// Stored elastic energy of particle p [J, or J/m in plane strain].
   virtual double strain_energy(const ParticleSet<Dim>& ps, int p) const = 0;
 };
+
+/// The loop every model's update_stress runs: fn(p) for each particle p of `ids` (in parallel,
+/// no allocation) returns false when its update failed; afterwards a non-finite stress also
+/// counts. Returns the smallest failing particle index, or -1 (the update_stress contract).
+template <int Dim, class Fn>
+long update_each(ParticleSet<Dim>& ps, std::span<const int> ids, Fn&& fn) {
+  constexpr long none = std::numeric_limits<long>::max();
+  long bad = none;
+  const long n = static_cast<long>(ids.size());
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+  for (long k = 0; k < n; ++k) {
+    const int p = ids[k];
+    if (!fn(p) || !ps.sigma[p].allFinite()) bad = std::min(bad, static_cast<long>(p));
+  }
+  return bad == none ? -1 : bad;
+}
 
 /// Builds the model a scene material names. Throws std::runtime_error for models this build's
 /// formulations cannot run yet.

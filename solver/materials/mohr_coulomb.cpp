@@ -25,7 +25,6 @@ namespace {
 namespace mc = mohr_coulomb;
 using mc::Principal;
 
-constexpr long kNoParticle = std::numeric_limits<long>::max();
 
 /// Spectral decomposition of the symmetric 2x2 [[a, b], [b, d]]: eigenvalues l1 >= l2 and the
 /// double angle of the first eigenvector (cos 2θ, sin 2θ), so that
@@ -75,15 +74,7 @@ class MohrCoulomb final : public MaterialModel<Dim> {
   double p_wave_modulus() const override { return e_.p_wave(); }
 
   long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double dt) const override {
-    long bad = kNoParticle;
-    const long n = static_cast<long>(ids.size());
-#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
-    for (long k = 0; k < n; ++k) {
-      const int p = ids[k];
-      const bool ok = finite_ ? finite_strain(ps, p, dt) : small_strain(ps, p, dt);
-      if (!ok || !ps.sigma[p].allFinite()) bad = std::min(bad, static_cast<long>(p));
-    }
-    return bad == kNoParticle ? -1 : bad;
+    return update_each(ps, ids, [&](int p) { return finite_ ? finite_strain(ps, p, dt) : small_strain(ps, p, dt); });
   }
 
   /// Stored elastic energy. Finite strain: ½ τ : C⁻¹ : τ per reference volume times V0 (= ψ of
