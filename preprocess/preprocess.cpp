@@ -125,13 +125,16 @@ std::vector<std::size_t> select(const std::vector<SeedPoint>& points, Keep&& kee
   return out;
 }
 
-/// particles/solid.vtu: the points of bodies with a solid. The dry arrays come first (what every
-/// solver reads); mass = (1 - n) rho_s V (or density V); `stress` is the effective stress. A
-/// single-point set adds its pore fluid on the same points, a double-point set the porosity.
-scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint>& points,
-                              const std::vector<BodyContent>& content, const InitialFields& init,
-                              const WaterLayout& w) {
-  const auto sel = select(points, [&](std::size_t b) { return content[b].has_solid(); });
+/// Index of the array after `velocity` in particle_cloud's output (where phase arrays go).
+constexpr long kAfterVelocity = 5;
+
+/// The arrays every particle file has, for the points `sel`: id, mass (density_of(content) V),
+/// volume, half_size, velocity (the body's initial expressions), material (material_of(body)),
+/// body, faces.
+template <class Density, class MaterialOf>
+scene::PointCloud particle_cloud(const scene::Scene& s, const std::vector<SeedPoint>& points,
+                                 const std::vector<std::size_t>& sel, const std::vector<BodyContent>& content,
+                                 Density&& density_of, MaterialOf&& material_of) {
   const int dim = s.dimension;
   scene::PointCloud c;
   c.points.resize(sel.size());
@@ -140,7 +143,6 @@ scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint
   auto& volume = c.add("volume", 1);
   auto& half = c.add("half_size", 3);
   auto& vel = c.add("velocity", 3);
-  auto& stress = c.add("stress", 6);
   auto& material = c.add("material", 1);
   auto& body_arr = c.add("body", 1);
   auto& faces = c.add("faces", 1);
@@ -151,22 +153,39 @@ scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint
     id.values[k] = static_cast<double>(k);
     const double V = std::pow(sp.spacing, dim);  // m^3, or m^2 per metre of thickness in 2D
     volume.values[k] = V;
-    mass.values[k] = content_of(content, sp).solid_density * V;
+    mass.values[k] = density_of(content_of(content, sp)) * V;
     for (int a = 0; a < dim; ++a) {
       half.values[3 * k + a] = 0.5 * sp.spacing;
       vel.values[3 * k + a] = scene::evaluate_expression(body.initial.velocity[a], sp.x[0], sp.x[1], sp.x[2]);
     }
-    for (std::size_t j = 0; j < 6; ++j) stress.values[6 * k + j] = init.stress[sel[k]][j];
-    material.values[k] = s.material_index(body.solid);
+    material.values[k] = material_of(body);
     body_arr.values[k] = sp.body;
     faces.values[k] = sp.faces;
   }
+  return c;
+}
+
+/// particles/solid.vtu: the points of bodies with a solid; mass = (1 - n) rho_s V (or density V);
+/// `stress` is the effective stress. A single-point set adds its pore fluid on the same points, a
+/// double-point set the porosity.
+scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint>& points,
+                              const std::vector<BodyContent>& content, const InitialFields& init,
+                              const WaterLayout& w) {
+  const auto sel = select(points, [&](std::size_t b) { return content[b].has_solid(); });
+  scene::PointCloud c = particle_cloud(
+      s, points, sel, content, [](const BodyContent& bc) { return bc.solid_density; },
+      [&](const scene::Body& b) { return static_cast<double>(s.material_index(b.solid)); });
+  scene::PointArray stress{"stress", 6, std::vector<double>(6 * sel.size())};
+  for (std::size_t k = 0; k < sel.size(); ++k)
+    for (std::size_t j = 0; j < 6; ++j) stress.values[6 * k + j] = init.stress[sel[k]][j];
+  c.arrays.insert(c.arrays.begin() + kAfterVelocity, std::move(stress));  // the documented order
   if (w.pore_fluid_on_solid || w.fluid_particles) {
     auto& porosity = c.add("porosity", 1);
     for (std::size_t k = 0; k < sel.size(); ++k) porosity.values[k] = content_of(content, points[sel[k]]).porosity;
   }
   if (w.pore_fluid_on_solid) {
     // Pore fluid of the same points; a dry body in a coupled scene has none (fluid_material -1).
+    const auto& volume = c.get("volume", "solid");
     auto& pore_pressure = c.add("pore_pressure", 1);
     auto& fluid_mass = c.add("fluid_mass", 1);
     auto& fluid_material = c.add("fluid_material", 1);
@@ -186,38 +205,18 @@ scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint
 scene::PointCloud fluid_cloud(const scene::Scene& s, const std::vector<SeedPoint>& points,
                               const std::vector<BodyContent>& content, const InitialFields& init) {
   const auto sel = select(points, [&](std::size_t b) { return content[b].has_fluid(); });
-  const int dim = s.dimension;
-  scene::PointCloud c;
-  c.points.resize(sel.size());
-  auto& id = c.add("id", 1);
-  auto& mass = c.add("mass", 1);
-  auto& volume = c.add("volume", 1);
-  auto& half = c.add("half_size", 3);
-  auto& vel = c.add("velocity", 3);
-  auto& pore_pressure = c.add("pore_pressure", 1);
-  auto& porosity = c.add("porosity", 1);
-  auto& material = c.add("material", 1);
-  auto& body_arr = c.add("body", 1);
-  auto& faces = c.add("faces", 1);
+  scene::PointCloud c = particle_cloud(
+      s, points, sel, content, [](const BodyContent& bc) { return bc.fluid_density; },
+      [&](const scene::Body& b) { return static_cast<double>(s.material_index(b.fluid)); });
+  scene::PointArray pore_pressure{"pore_pressure", 1, std::vector<double>(sel.size())};
+  scene::PointArray porosity{"porosity", 1, std::vector<double>(sel.size())};
   for (std::size_t k = 0; k < sel.size(); ++k) {
-    const auto& sp = points[sel[k]];
-    const auto& body = s.bodies[static_cast<std::size_t>(sp.body)];
-    const BodyContent& bc = content_of(content, sp);
-    c.points[k] = sp.x;
-    id.values[k] = static_cast<double>(k);
-    const double V = std::pow(sp.spacing, dim);  // m^3, or m^2 per metre of thickness in 2D
-    volume.values[k] = V;
-    mass.values[k] = bc.fluid_density * V;
-    for (int a = 0; a < dim; ++a) {
-      half.values[3 * k + a] = 0.5 * sp.spacing;
-      vel.values[3 * k + a] = scene::evaluate_expression(body.initial.velocity[a], sp.x[0], sp.x[1], sp.x[2]);
-    }
     pore_pressure.values[k] = init.pore_pressure[sel[k]];
-    porosity.values[k] = bc.porosity;
-    material.values[k] = s.material_index(body.fluid);
-    body_arr.values[k] = sp.body;
-    faces.values[k] = sp.faces;
+    porosity.values[k] = content_of(content, points[sel[k]]).porosity;
   }
+  // The documented order: ... velocity, pore_pressure, porosity, material, body, faces.
+  c.arrays.insert(c.arrays.begin() + kAfterVelocity, std::move(porosity));
+  c.arrays.insert(c.arrays.begin() + kAfterVelocity, std::move(pore_pressure));
   return c;
 }
 
