@@ -167,9 +167,7 @@ class Dry final : public Formulation<Dim> {
 
 template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_dry(const scene::Scene& s, const State<Dim>& state) {
-  return dispatch_shape<Dim>(s.grid.shape_function, [&]<class Shape>() -> std::unique_ptr<Formulation<Dim>> {
-    return std::make_unique<Dry<Dim, Shape>>(s, state);
-  });
+  return make_for_shape<Dry, Dim>(s, state);
 }
 
 template std::unique_ptr<Formulation<2>> make_dry<2>(const scene::Scene&, const State<2>&);

@@ -573,9 +573,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
 
 template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_explicit_single_point(const scene::Scene& s, const State<Dim>& state) {
-  return dispatch_shape<Dim>(s.grid.shape_function, [&]<class Shape>() -> std::unique_ptr<Formulation<Dim>> {
-    return std::make_unique<ExplicitSinglePoint<Dim, Shape>>(s, state);
-  });
+  return make_for_shape<ExplicitSinglePoint, Dim>(s, state);
 }
 
 template std::unique_ptr<Formulation<2>> make_explicit_single_point<2>(const scene::Scene&, const State<2>&);

@@ -121,6 +121,14 @@ auto dispatch_shape(scene::ShapeFunction f, Fn&& fn) {
   throw std::logic_error("unknown shape function");
 }
 
+/// A formulation class template F<Dim, Shape> built for the scene's shape function.
+template <template <int, class> class F, int Dim>
+std::unique_ptr<Formulation<Dim>> make_for_shape(const scene::Scene& s, const State<Dim>& state) {
+  return dispatch_shape<Dim>(s.grid.shape_function, [&]<class Shape>() -> std::unique_ptr<Formulation<Dim>> {
+    return std::make_unique<F<Dim, Shape>>(s, state);
+  });
+}
+
 template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_dry(const scene::Scene& s, const State<Dim>& state);
 template <int Dim>
