@@ -5,12 +5,15 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "postprocess/postprocess.hpp"
 #include "preprocess/preprocess.hpp"
 #include "scene/scene.hpp"
+#include "solver/element.hpp"
 #include "solver/run.hpp"
 #include "swmpm/version.hpp"
 
@@ -167,6 +170,53 @@ int postprocess_command(const std::string& run_dir, const PostArgs& a, bool quie
   return 0;
 }
 
+/// What `swmpm element SCENE.json ...` was given.
+struct ElementArgs {
+  std::string material, test, out, plot;
+  double p0 = 0.0, axial_strain = 0.0;
+  int steps = 100;
+};
+
+int element_command(const swmpm::scene::Scene& scene, const ElementArgs& a, bool quiet) {
+  swmpm::ElementResult r;
+  try {
+    r = swmpm::run_element(scene, a.material, swmpm::parse_element_test(a.test), a.p0, a.axial_strain, a.steps);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "swmpm element: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "swmpm element: " << e.what() << "\n";
+    return 1;
+  }
+  swmpm::post::CsvResult csv;
+  std::ostringstream note;
+  note << "swmpm element: " << a.test << ", material " << r.material << " (" << r.model << "), p0 = " << a.p0
+       << " Pa, " << a.steps << " steps; compression positive, axial = z";
+  csv.comments.push_back(note.str());
+  csv.names = {"axial_strain", "p", "q", "volumetric_strain"};
+  for (std::size_t i = 0; i < r.size(); ++i)
+    csv.rows.push_back({r.axial_strain[i], r.p[i], r.q[i], r.volumetric_strain[i]});
+  try {
+    if (a.out.empty()) {
+      swmpm::post::write_csv(csv, std::cout);
+    } else {
+      std::ofstream out(a.out);
+      if (!out) throw std::runtime_error(a.out + ": cannot write file");
+      swmpm::post::write_csv(csv, out);
+      if (!out) throw std::runtime_error(a.out + ": write failed");
+      if (!quiet) std::cout << "element: " << a.out << " (" << csv.rows.size() << " rows)\n";
+    }
+    if (!a.plot.empty()) {
+      swmpm::post::plot_element_curves(csv, note.str(), a.plot);
+      if (!quiet) (a.out.empty() ? std::cerr : std::cout) << "plot: " << a.plot << "\n";
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "swmpm element: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -200,8 +250,20 @@ int main(int argc, char** argv) {
   run->add_option("-o,--output", out_dir, "Run directory (default runs/<scene name>)");
   run->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::NonNegativeNumber);
 
-  auto* element = app.add_subcommand("element", "Drive one material point (calibration; not implemented yet)");
-  element->allow_extras();
+  auto* element = app.add_subcommand("element", "Drive one material point of a scene's material (calibration, checks)");
+  ElementArgs el;
+  element->add_option("scene", scene_path, "Scene file (JSON) that defines the material")->required();
+  element->add_option("--material", el.material, "Name of the scene material to test")->required();
+  element->add_option("--test", el.test, "drained-triaxial, undrained-triaxial or oedometer (axial = z)")
+      ->required()
+      ->check(CLI::IsMember({"drained-triaxial", "undrained-triaxial", "oedometer"}));
+  element->add_option("--p0", el.p0, "Initial isotropic effective stress [Pa], compression positive")
+      ->required()
+      ->check(CLI::PositiveNumber);
+  element->add_option("--axial-strain", el.axial_strain, "Final axial strain [-], compression positive")->required();
+  element->add_option("--steps", el.steps, "Equal strain increments (default 100)")->check(CLI::Range(1, 100000000));
+  element->add_option("--out", el.out, "CSV file (default: standard output)");
+  element->add_option("--plot", el.plot, "PNG: q-p', q-axial strain, volumetric-axial strain");
   for (auto* sub : {pre, solve, post, run, element}) sub->add_flag("-q,--quiet", quiet, "No terminal output");
 
   CLI11_PARSE(app, argc, argv);
@@ -224,10 +286,7 @@ int main(int argc, char** argv) {
       if (rc != 0) return rc;
       return postprocess_command(dir, {}, quiet);
     }
-    if (*element) {
-      std::cerr << "swmpm element: not implemented yet in this version\n";
-      return 2;
-    }
+    if (*element) return element_command(swmpm::scene::load_scene(scene_path), el, quiet);
   } catch (const swmpm::scene::SceneError& e) {
     for (const auto& line : e.lines()) std::cerr << line << "\n";
     return 2;

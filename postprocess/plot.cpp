@@ -270,4 +270,39 @@ std::vector<std::string> plot_fields(const std::string& run_dir, const std::stri
   return written;
 }
 
+void plot_element_curves(const CsvResult& table, const std::string& title, const std::string& png) {
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(table.names.begin(), table.names.end(), name);
+    if (it == table.names.end()) throw std::runtime_error("plot_element_curves: no column " + name);
+    std::vector<double> out;
+    const auto c = static_cast<std::size_t>(it - table.names.begin());
+    for (const auto& row : table.rows) out.push_back(row[c]);
+    return out;
+  };
+  // Percent and kPa on the axes.
+  auto scaled = [](std::vector<double> v, double f) {
+    for (double& x : v) x *= f;
+    return v;
+  };
+  const auto ea = scaled(column("axial_strain"), 100.0), p = scaled(column("p"), 1e-3),
+             q = scaled(column("q"), 1e-3), ev = scaled(column("volumetric_strain"), 100.0);
+  const TempDir tmp;
+  const fs::path data = tmp / "element.dat";
+  write_columns(data, {&ea, &p, &q, &ev});
+  const std::string d = quoted(data.string());
+  std::ostringstream gp;
+  gp << "set terminal pngcairo size 1500,480 font 'sans,10'\n"
+     << "set output " << quoted(png) << "\n"
+     << "set grid\nunset key\n"
+     << "set multiplot layout 1,3 title " << quoted(title) << "\n"
+     << "set xlabel \"p' [kPa]\"\nset ylabel 'q [kPa]'\n"
+     << "plot " << d << " using 2:3 with lines lw 2\n"
+     << "set xlabel 'axial strain [%]'\nset ylabel 'q [kPa]'\n"
+     << "plot " << d << " using 1:3 with lines lw 2\n"
+     << "set xlabel 'axial strain [%]'\nset ylabel 'volumetric strain [%] (compression +)'\n"
+     << "plot " << d << " using 1:4 with lines lw 2\n"
+     << "unset multiplot\n";
+  run_gnuplot(gp.str(), png, tmp);
+}
+
 }  // namespace swmpm::post

@@ -183,6 +183,10 @@ std::string describe(const Comparison& c);
 // ---------------------------------------------------------------------------------------------
 // plots (plot.cpp): gnuplot, pngcairo
 
+/// The single-element curves of `swmpm element` (a table with columns axial_strain, p, q,
+/// volumetric_strain; Pa, compression positive) in one PNG: q–p′, q–ε_a and ε_v–ε_a.
+void plot_element_curves(const CsvResult& table, const std::string& title, const std::string& png);
+
 /// Draws every monitor of RUN_DIR/monitors.csv into RUN_DIR/plots/<monitor>.png (one panel per
 /// quantity); a reference curve is overlaid on the panel its spec names. Returns the files written.
 std::vector<std::string> plot_monitors(const std::string& run_dir, const std::vector<ReferenceSpec>& references = {});
