@@ -64,10 +64,8 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
       else if (qn == "kinetic_energy") c = {-1, Q::kinetic, 0};
       else if (qn == "strain_energy") c = {-1, Q::strain, 0};
       else if (qn == "total_energy") c = {-1, Q::total, 0};
-      else if (qn == "external_work") {
-        c = {-1, Q::work, 0};
-        needs_work_ = true;
-      } else
+      else if (qn == "external_work") c = {-1, Q::work, 0};
+      else
         throw std::runtime_error(where + "/quantities: \"" + qn + "\" is not available in this formulation");
       if (c.comp < 0) throw std::runtime_error(where + "/quantities: unknown component in \"" + qn + "\"");
       if (c.particle < 0 && c.q < Q::kinetic)

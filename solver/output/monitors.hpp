@@ -17,7 +17,6 @@ template <int Dim>
 class Monitors {
  public:
   Monitors(const scene::Scene& s, const State<Dim>& st, const std::string& path, const std::string& header_comment);
-  bool needs_external_work() const { return needs_work_; }
   /// Appends one row at the state's time.
   void record(const State<Dim>& st, const Formulation<Dim>& f, double external_work);
   /// One line per point monitor: which particle it follows and where it started.
@@ -33,7 +32,6 @@ class Monitors {
   std::vector<std::string> names_;
   std::vector<std::int64_t> monitor_particle_;  // ids, -1 for global
   std::vector<Column> columns_;
-  bool needs_work_ = false;
   std::ofstream out_;
 };
 
