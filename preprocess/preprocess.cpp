@@ -279,6 +279,12 @@ namespace {
 /// Switches a scene may set that the chosen formulation does not use yet: rejected rather than
 /// silently ignored. Checked on the file as written (the resolved scene has every default).
 void reject_unused_switches(const std::string& scene_path, const scene::Scene& s) {
+  if (s.formulation == scene::Formulation::explicit_single_point)
+    for (std::size_t k = 0; k < s.materials.size(); ++k)
+      if (s.materials[k].model != scene::MaterialModel::fluid && s.materials[k].permeability_law != "constant")
+        throw std::runtime_error(scene_path + ": /materials/" + std::to_string(k) + "/permeability_law: \"" +
+                                 s.materials[k].permeability_law +
+                                 "\" is not implemented in explicit-single-point yet (constant permeability only)");
   std::ifstream in(scene_path);
   const auto raw = nlohmann::json::parse(in, nullptr, false);
   if (raw.is_discarded() || !raw.contains("solver")) return;

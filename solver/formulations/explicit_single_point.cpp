@@ -70,9 +70,6 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     for (std::size_t k = 0; k < s.materials.size(); ++k) {
       const auto& m = s.materials[k];
       if (m.model == scene::MaterialModel::fluid) continue;
-      if (m.permeability_law != "constant")
-        throw std::runtime_error("materials/" + std::to_string(k) + "/permeability_law: \"" + m.permeability_law +
-                                 "\" is not implemented in explicit-single-point yet (constant permeability only)");
       pore_[k].k = m.has("hydraulic_conductivity") ? m.at("hydraulic_conductivity") : 0.0;
     }
     for (std::size_t p = 0; p < state.solid.size(); ++p) {  // fluid of each solid material (first seen)
