@@ -262,6 +262,25 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, con
       if (ps.x0[p][a] < region->first[a] || ps.x0[p][a] > region->second[a]) return false;
     return true;
   };
+  // Axis face f = 2 axis + side: particle p's face point (x_p + l_p along the outward normal) with
+  // its nominal face area A_p (the domain's extent across the face; unit thickness in 2D), loaded
+  // by the traction t A_p (`traction` given) or by the normal stress sn A_p n (sn = -pressure).
+  auto add_axis_face = [&](Entry& e, std::size_t p, int f, double sn, const scene::Vec3* traction) {
+    const int axis = f / 2;
+    const double outward = f % 2 == 0 ? -1.0 : 1.0;
+    double area = 1.0;
+    for (int a = 0; a < Dim; ++a)
+      if (a != axis) area *= 2.0 * ps.l[p][a];
+    Vec<Dim> force = Vec<Dim>::Zero(), offset = Vec<Dim>::Zero();
+    if (traction)
+      for (int a = 0; a < Dim; ++a) force[a] = (*traction)[a] * area;
+    else
+      force[axis] = outward * sn * area;
+    offset[axis] = outward * ps.l[p][axis];
+    e.ids.push_back(ps.id[p]);
+    e.force.push_back(force);
+    e.offset.push_back(offset);
+  };
   // Named surface k: the tagged particles of `keep` share the surface's samples (share_samples);
   // force_of(area, area-weighted normal) is each one's force at f(t) = 1.
   auto add_named = [&](Entry& e, int k, int body, const std::optional<std::pair<scene::Vec3, scene::Vec3>>& region,
@@ -307,22 +326,11 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, con
     }
     // An axis face (x_min ... z_max): the body's surface layer facing that way, loaded at the
     // particles' face points with their nominal face area (exact: the layer follows the lattice).
-    const int f = face_index(load.face), axis = f / 2;
-    const double outward = f % 2 == 0 ? -1.0 : 1.0;
+    const int f = face_index(load.face);
     for (std::size_t p = 0; p < ps.size(); ++p) {
       if (ps.body[p] != body || !(ps.faces[p] & (1u << f)) || !in_region(p, load.region)) continue;
-      double area = 1.0;  // the particle domain's extent across the face (unit thickness in 2D)
-      for (int a = 0; a < Dim; ++a)
-        if (a != axis) area *= 2.0 * ps.l[p][a];
-      Vec<Dim> force = Vec<Dim>::Zero();
-      if (load.type == "pressure") force[axis] = -outward * load.value[0] * area;  // pushes inward
-      else
-        for (int a = 0; a < Dim; ++a) force[a] = load.value[a] * area;
-      Vec<Dim> offset = Vec<Dim>::Zero();
-      offset[axis] = outward * ps.l[p][axis];
-      e.ids.push_back(ps.id[p]);
-      e.force.push_back(force);
-      e.offset.push_back(offset);
+      if (load.type == "pressure") add_axis_face(e, p, f, -load.value[0], nullptr);  // pushes inward
+      else add_axis_face(e, p, f, 0.0, &load.value);
     }
     entries_.push_back(std::move(e));
   }
@@ -349,15 +357,7 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, con
       for (std::size_t p = 0; p < ps.size(); ++p) {
         if (!wet(p) || !(ps.faces[p] & (1u << f))) continue;
         if (std::abs(ps.x0[p][axis] + outward * ps.l[p][axis] - plane) > 0.5 * ps.l[p][axis]) continue;
-        double area = 1.0;
-        for (int a = 0; a < Dim; ++a)
-          if (a != axis) area *= 2.0 * ps.l[p][a];
-        Vec<Dim> force = Vec<Dim>::Zero(), offset = Vec<Dim>::Zero();
-        force[axis] = -outward * b.fluid_value * area;
-        offset[axis] = outward * ps.l[p][axis];
-        e.ids.push_back(ps.id[p]);
-        e.force.push_back(force);
-        e.offset.push_back(offset);
+        add_axis_face(e, p, f, -b.fluid_value, nullptr);
       }
     }
     if (e.ids.empty())
