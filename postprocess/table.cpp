@@ -68,57 +68,62 @@ bool Table::has(const std::string& name) const {
   return false;
 }
 
-Table read_csv(const std::string& path) {
+namespace {
+
+/// Calls fn(cells, line_no) for every line of the CSV file that is not empty or a # comment.
+template <class Fn>
+void for_each_csv_line(const std::string& path, const std::string& what, Fn&& fn) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open file");
-  Table t;
+  if (!in) throw std::runtime_error(path + ": cannot open " + what);
   std::string line;
   std::size_t line_no = 0;
   while (std::getline(in, line)) {
     ++line_no;
     if (line.empty() || line[0] == '#' || line == "\r") continue;
-    const auto cells = split_line(line);
+    fn(split_line(line), line_no);
+  }
+}
+
+/// The numbers of a data row; throws naming the file, line and cell that is not a number.
+std::vector<double> parse_row(const std::vector<std::string>& cells, const std::string& path, std::size_t line_no) {
+  std::vector<double> row(cells.size());
+  for (std::size_t k = 0; k < cells.size(); ++k)
+    if (!parse_number(cells[k], row[k]))
+      throw std::runtime_error(path + ":" + std::to_string(line_no) + ": \"" + cells[k] + "\" is not a number");
+  return row;
+}
+
+}  // namespace
+
+Table read_csv(const std::string& path) {
+  Table t;
+  for_each_csv_line(path, "file", [&](const std::vector<std::string>& cells, std::size_t line_no) {
     if (t.names.empty()) {
       for (const auto& c : cells) t.names.push_back(trim(c));
       t.columns.resize(t.names.size());
-      continue;
+      return;
     }
     if (cells.size() != t.names.size())
       throw std::runtime_error(path + ":" + std::to_string(line_no) + ": " + std::to_string(cells.size()) +
                                " values where the header has " + std::to_string(t.names.size()));
-    for (std::size_t k = 0; k < cells.size(); ++k) {
-      double v;
-      if (!parse_number(cells[k], v))
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": \"" + cells[k] + "\" is not a number");
-      t.columns[k].push_back(v);
-    }
-  }
+    const auto row = parse_row(cells, path, line_no);
+    for (std::size_t k = 0; k < row.size(); ++k) t.columns[k].push_back(row[k]);
+  });
   if (t.names.empty()) throw std::runtime_error(path + ": no header line");
   return t;
 }
 
 Curve read_reference(const std::string& path, const std::string& column) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open reference file");
   std::vector<std::string> names;
   std::vector<std::vector<double>> rows;
-  std::string line;
-  std::size_t line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.empty() || line[0] == '#' || line == "\r") continue;
-    const auto cells = split_line(line);
+  for_each_csv_line(path, "reference file", [&](const std::vector<std::string>& cells, std::size_t line_no) {
     // A header is optional: a first line that is all numbers is data.
     if (names.empty() && rows.empty() && !all_numbers(cells)) {
       for (const auto& c : cells) names.push_back(trim(c));
-      continue;
+      return;
     }
-    std::vector<double> row(cells.size());
-    for (std::size_t k = 0; k < cells.size(); ++k)
-      if (!parse_number(cells[k], row[k]))
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": \"" + cells[k] + "\" is not a number");
-    rows.push_back(std::move(row));
-  }
+    rows.push_back(parse_row(cells, path, line_no));
+  });
   if (rows.empty()) throw std::runtime_error(path + ": no data rows in the reference file");
   std::size_t k = 1;
   Curve c;
