@@ -183,6 +183,12 @@ scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint
     auto& porosity = c.add("porosity", 1);
     for (std::size_t k = 0; k < sel.size(); ++k) porosity.values[k] = content_of(content, points[sel[k]]).porosity;
   }
+  if (w.fluid_particles) {
+    // Double-point: the pore pressure at the soil points too (the solver keeps it as the water
+    // field interpolated there, for output and monitors).
+    auto& pore_pressure = c.add("pore_pressure", 1);
+    for (std::size_t k = 0; k < sel.size(); ++k) pore_pressure.values[k] = init.pore_pressure[sel[k]];
+  }
   if (w.pore_fluid_on_solid) {
     // Pore fluid of the same points; a dry body in a coupled scene has none (fluid_material -1).
     const auto& volume = c.get("volume", "solid");
@@ -289,6 +295,12 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
   const auto raw = nlohmann::json::parse(in, nullptr, false);
   if (raw.is_discarded() || !raw.contains("solver")) return;
   const auto& solver = raw["solver"];
+  const bool semi_implicit = s.formulation == scene::Formulation::semi_implicit_single_point ||
+                             s.formulation == scene::Formulation::semi_implicit_double_point;
+  if (semi_implicit && solver.contains("stabilisation") && solver["stabilisation"].value("strain_smoothing", false))
+    throw std::runtime_error(scene_path + ": /solver/stabilisation/strain_smoothing: cell-average strain smoothing "
+                             "belongs to explicit-single-point (seed 000); the semi-implicit formulations use the "
+                             "pressure projection (and F-bar); remove the key or set it to false");
   if (s.formulation == scene::Formulation::dry) {
     if (solver.contains("stabilisation"))
       throw std::runtime_error(scene_path + ": /solver/stabilisation: the dry formulation has no pore pressure to stabilise "

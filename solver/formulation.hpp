@@ -39,6 +39,10 @@ struct Health {
 template <int Dim>
 struct State {
   ParticleSet<Dim> solid;
+  /// Water points of the double-point formulations (particles/fluid.vtu; empty otherwise): x, v,
+  /// m (water mass, constant), V (the mixture volume the point stands for, V = m / (n rho_w)),
+  /// and through add_fluid() n (porosity at the point) and p (pore pressure, compression positive).
+  ParticleSet<Dim> fluid;
   SurfaceSamples<Dim> surfaces;  // named-surface samples at t = 0 (empty without named surfaces)
   double time = 0.0;
   long step = 0;

@@ -133,5 +133,7 @@ template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_dry(const scene::Scene& s, const State<Dim>& state);
 template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_explicit_single_point(const scene::Scene& s, const State<Dim>& state);
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_semi_implicit(const scene::Scene& s, const State<Dim>& state);
 
 }  // namespace swmpm

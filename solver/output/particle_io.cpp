@@ -15,18 +15,24 @@ ParticleSet<Dim> particles_from_cloud(const scene::PointCloud& c, const std::str
   const auto& volume = c.get("volume", where);
   const auto& half = c.get("half_size", where);
   const auto& vel = c.get("velocity", where);
-  const auto& stress = c.get("stress", where);
+  // Double-point water points (particles/fluid.vtu) carry no effective stress; every other set does.
+  const bool water_points = c.find("pore_pressure") != nullptr && c.find("fluid_mass") == nullptr;
+  const auto* stress = water_points ? c.find("stress") : &c.get("stress", where);
   const auto& material = c.get("material", where);
   const auto& body = c.get("body", where);
   const auto& faces = c.get("faces", where);
   const auto* disp = c.find("displacement");
   const auto* eps_p = c.find("plastic_strain");
-  // Single-point two-phase sets carry the pore fluid on the same points.
+  // Single-point two-phase sets carry the pore fluid on the same points (pore_pressure,
+  // porosity, fluid_mass, fluid_material). Double-point sets: the soil points carry the porosity
+  // only, the water points the pore pressure and porosity; both get the pore-fluid arrays (the
+  // formulation fills what the file lacks: fluid mass, fluid material -1 = the body's fluid).
   const auto* pore_pressure = c.find("pore_pressure");
-  const bool two_phase = pore_pressure != nullptr;
+  const bool single_point = pore_pressure != nullptr && !water_points;
+  const bool two_phase = single_point || c.find("porosity") != nullptr;
   const auto* porosity = two_phase ? &c.get("porosity", where) : nullptr;
-  const auto* fluid_mass = two_phase ? &c.get("fluid_mass", where) : nullptr;
-  const auto* fluid_material = two_phase ? &c.get("fluid_material", where) : nullptr;
+  const auto* fluid_mass = single_point ? &c.get("fluid_mass", where) : nullptr;
+  const auto* fluid_material = single_point ? &c.get("fluid_material", where) : nullptr;
   const auto* fluid_velocity = c.find("fluid_velocity");
   if (two_phase) ps.add_fluid();
   for (std::size_t p = 0; p < n; ++p) {
@@ -39,16 +45,17 @@ ParticleSet<Dim> particles_from_cloud(const scene::PointCloud& c, const std::str
     }
     ps.m[p] = mass.values[p];
     ps.V[p] = ps.V0[p] = volume.values[p];
-    for (int k = 0; k < 6; ++k) ps.sigma[p][k] = stress.values[6 * p + k];
+    if (stress)
+      for (int k = 0; k < 6; ++k) ps.sigma[p][k] = stress->values[6 * p + k];
     ps.material[p] = static_cast<std::int32_t>(material.values[p]);
     ps.body[p] = static_cast<std::int32_t>(body.values[p]);
     ps.faces[p] = static_cast<std::uint32_t>(faces.values[p]);
     if (eps_p) ps.eps_p[p] = eps_p->values[p];
     if (two_phase) {
       ps.n[p] = porosity->values[p];
-      ps.p[p] = pore_pressure->values[p];
-      ps.m_f[p] = fluid_mass->values[p];
-      ps.fluid_material[p] = static_cast<std::int32_t>(fluid_material->values[p]);
+      ps.p[p] = pore_pressure ? pore_pressure->values[p] : 0.0;
+      ps.m_f[p] = fluid_mass ? fluid_mass->values[p] : 0.0;
+      ps.fluid_material[p] = fluid_material ? static_cast<std::int32_t>(fluid_material->values[p]) : -1;
       for (int a = 0; a < Dim; ++a) ps.v_f[p][a] = fluid_velocity ? fluid_velocity->values[3 * p + a] : ps.v[p][a];
     }
     if (!(ps.m[p] > 0.0) || !(ps.V[p] > 0.0))
@@ -117,6 +124,38 @@ scene::PointCloud particles_to_cloud(const ParticleSet<Dim>& ps) {
 }
 
 template <int Dim>
+scene::PointCloud water_points_to_cloud(const ParticleSet<Dim>& ws) {
+  scene::PointCloud c;
+  const std::size_t n = ws.size();
+  c.points.resize(n);
+  auto& id = c.add("id", 1);
+  auto& mass = c.add("mass", 1);
+  auto& volume = c.add("volume", 1);
+  auto& vel = c.add("velocity", 3);
+  auto& disp = c.add("displacement", 3);
+  auto& pore = c.add("pore_pressure", 1);
+  auto& por = c.add("porosity", 1);
+  auto& material = c.add("material", 1);
+  auto& body = c.add("body", 1);
+  for (std::size_t p = 0; p < n; ++p) {
+    c.points[p] = {0, 0, 0};
+    for (int a = 0; a < Dim; ++a) {
+      c.points[p][a] = ws.x[p][a];
+      vel.values[3 * p + a] = ws.v[p][a];
+      disp.values[3 * p + a] = ws.x[p][a] - ws.x0[p][a];
+    }
+    id.values[p] = static_cast<double>(ws.id[p]);
+    mass.values[p] = ws.m[p];
+    volume.values[p] = ws.V[p];
+    pore.values[p] = ws.p[p];
+    por.values[p] = ws.n[p];
+    material.values[p] = ws.material[p];
+    body.values[p] = ws.body[p];
+  }
+  return c;
+}
+
+template <int Dim>
 SurfaceSamples<Dim> surface_samples_from_cloud(const scene::PointCloud& c, const std::string& where) {
   SurfaceSamples<Dim> out;
   const auto& surface = c.get("surface", where);
@@ -138,6 +177,8 @@ SurfaceSamples<Dim> surface_samples_from_cloud(const scene::PointCloud& c, const
   return out;
 }
 
+template scene::PointCloud water_points_to_cloud<2>(const ParticleSet<2>&);
+template scene::PointCloud water_points_to_cloud<3>(const ParticleSet<3>&);
 template SurfaceSamples<2> surface_samples_from_cloud<2>(const scene::PointCloud&, const std::string&);
 template SurfaceSamples<3> surface_samples_from_cloud<3>(const scene::PointCloud&, const std::string&);
 template ParticleSet<2> particles_from_cloud<2>(const scene::PointCloud&, const std::string&);

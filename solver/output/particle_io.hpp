@@ -19,4 +19,9 @@ SurfaceSamples<Dim> surface_samples_from_cloud(const scene::PointCloud& c, const
 template <int Dim>
 scene::PointCloud particles_to_cloud(const ParticleSet<Dim>& ps);
 
+/// A frame of double-point water points: id, mass, volume, velocity, displacement, pore_pressure,
+/// porosity, material, body.
+template <int Dim>
+scene::PointCloud water_points_to_cloud(const ParticleSet<Dim>& ws);
+
 }  // namespace swmpm

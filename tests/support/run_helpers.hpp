@@ -45,11 +45,14 @@ inline nlohmann::json load_json(const std::string& path) {
   return nlohmann::json::parse(in);
 }
 
-/// The last frame of the run's results.pvd.
-inline scene::PointCloud last_frame(const std::string& run_dir) {
+/// The last frame of the run's results.pvd for one phase (solid: the soil points; fluid: the
+/// water points of a double-point run).
+inline scene::PointCloud last_frame(const std::string& run_dir, const std::string& group = "solid") {
   const auto entries = scene::read_pvd(run_dir + "/output/results.pvd");
-  EXPECT_FALSE(entries.empty());
-  return scene::read_vtu(run_dir + "/output/" + entries.back().file);
+  for (auto e = entries.rbegin(); e != entries.rend(); ++e)
+    if (e->group == group) return scene::read_vtu(run_dir + "/output/" + e->file);
+  ADD_FAILURE() << run_dir << ": no " << group << " frame";
+  return {};
 }
 
 inline std::string read_text(const std::string& path) {

@@ -1,0 +1,209 @@
+// The pressure-increment Poisson system of the semi-implicit formulations (seed 001, eq. 60), on
+// the structured grid, assembled into a fixed sparsity pattern and solved with CHOLMOD.
+//
+// Each node I keeps the row of L in a dense stencil of (2R + 1)^Dim coefficients (the nodes that
+// can share a particle with it: R = S - 1 for shape functions of support S). Particles scatter into these rows
+// through the stripe schedule (race-free, fixed order), so assembly builds no triplets and sorts
+// nothing. The CSC matrix of the unknown nodes (lower triangle) is filled from the stencils by a
+// gather map; its pattern and CHOLMOD's symbolic analysis are rebuilt only when the set of unknown
+// nodes changes, and reused otherwise (only the numeric factorisation runs each step).
+#pragma once
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Sparse>
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+#include "solver/grid/grid.hpp"
+#include "solver/shape/shape.hpp"
+
+namespace swmpm {
+
+/// A box stencil of reach R nodes per axis around a node: slot k <-> offset d in [-R, R]^Dim
+/// (x fastest), and each slot's step in flat node index on a grid with `nodes` per axis.
+template <int Dim, int R>
+struct Stencil {
+  static constexpr int W = 2 * R + 1;
+  static constexpr int K = Dim == 2 ? W * W : W * W * W;
+  static std::array<int, Dim> offset(int k) {
+    std::array<int, Dim> d;
+    for (int a = 0; a < Dim; ++a) {
+      d[a] = k % W - R;
+      k /= W;
+    }
+    return d;
+  }
+  static int slot(const std::array<int, Dim>& d) {
+    int k = 0, mul = 1;
+    for (int a = 0; a < Dim; ++a) {
+      k += (d[a] + R) * mul;
+      mul *= W;
+    }
+    return k;
+  }
+  static std::array<long, K> steps(const std::array<int, Dim>& nodes) {
+    std::array<long, K> st{};
+    for (int k = 0; k < K; ++k) {
+      const auto d = offset(k);
+      long step = 0, stride = 1;
+      for (int a = 0; a < Dim; ++a) {
+        step += d[a] * stride;
+        stride *= nodes[a];
+      }
+      st[k] = step;
+    }
+    return st;
+  }
+};
+
+/// Symmetric system on grid nodes whose rows reach R nodes per axis (R = S - 1 for shape
+/// functions with support S).
+template <int Dim, int R>
+class PressurePoisson {
+ public:
+  using St = Stencil<Dim, R>;
+  static constexpr int W = St::W;
+  static constexpr int K = St::K;
+
+  /// Role of a node in the system: no equation (no water touches it), unknown, or prescribed.
+  enum Role : std::uint8_t { inactive = 0, unknown = 1, prescribed = 2 };
+
+  explicit PressurePoisson(const Grid<Dim>& g) : nodes_(g.nodes_per_axis()), step_(St::steps(g.nodes_per_axis())) {
+    const std::size_t n = g.num_nodes();
+    stencil_.assign(n * K, 0.0);
+    rhs_.assign(n, 0.0);
+    dp_.assign(n, 0.0);
+    role_.assign(n, inactive);
+    eq_.assign(n, -1);
+  }
+
+  /// Zeroes the rows, right-hand sides and roles of the nodes in `box`.
+  void clear(const Grid<Dim>& g, const NodeBox<Dim>& box) {
+    g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
+      std::fill_n(stencil_.data() + i * K, K, 0.0);
+      rhs_[i] = 0.0;
+      dp_[i] = 0.0;
+      role_[i] = inactive;
+    });
+  }
+
+  /// Row i of L over the stencil (slot St::slot(d) holds L_{i, i + d}).
+  double* row(std::size_t i) { return stencil_.data() + i * K; }
+  double& rhs(std::size_t i) { return rhs_[i]; }
+  /// Sets a node's role; a prescribed node takes the increment `value`.
+  void set_unknown(std::size_t i) { role_[i] = unknown; }
+  void prescribe(std::size_t i, double value) {
+    role_[i] = prescribed;
+    dp_[i] = value;
+  }
+  Role role(std::size_t i) const { return static_cast<Role>(role_[i]); }
+
+  /// Solves L dp = rhs on the unknown nodes of `box` (prescribed nodes keep their value, inactive
+  /// nodes get 0). Returns false when L is not positive definite (a part of the water touches no
+  /// prescribed node: its pressure is undetermined).
+  bool solve(const Grid<Dim>& g, const NodeBox<Dim>& box) {
+    // Equations in increasing flat node index: the stencil walks rows in that order too, so every
+    // CSC column comes out sorted.
+    unknowns_.clear();
+    g.for_each_node(box, [&](std::size_t i, const auto&) {
+      if (role_[i] == unknown) {
+        eq_[i] = static_cast<int>(unknowns_.size());
+        unknowns_.push_back(static_cast<int>(i));
+      } else {
+        eq_[i] = -1;
+      }
+    });
+    const int n = static_cast<int>(unknowns_.size());
+    if (n == 0) return true;
+    if (unknowns_ != pattern_nodes_) build_pattern();
+    double* values = A_.valuePtr();
+    const std::size_t nnz = gather_.size();
+    for (std::size_t e = 0; e < nnz; ++e) values[e] = stencil_[gather_[e]];
+    if (!analysed_) {
+      solver_.analyzePattern(A_);
+      analysed_ = true;
+    }
+    solver_.factorize(A_);
+    if (solver_.info() != Eigen::Success) return false;
+    b_.resize(n);
+    for (int j = 0; j < n; ++j) {
+      const std::size_t I = static_cast<std::size_t>(unknowns_[j]);
+      double r = rhs_[I];
+      const double* row = stencil_.data() + I * K;
+      for (int k = 0; k < K; ++k) {  // move the prescribed neighbours' known increments to the right
+        if (row[k] == 0.0) continue;
+        const long J = static_cast<long>(I) + step_[k];
+        if (role_[J] == prescribed) r -= row[k] * dp_[J];
+      }
+      b_[j] = r;
+    }
+    x_ = solver_.solve(b_);
+    if (solver_.info() != Eigen::Success) return false;
+    for (int j = 0; j < n; ++j) dp_[unknowns_[j]] = x_[j];
+    return true;
+  }
+
+  /// The increment at node i (after solve).
+  double dp(std::size_t i) const { return dp_[i]; }
+  const std::vector<double>& dp() const { return dp_; }
+  int unknown_count() const { return static_cast<int>(unknowns_.size()); }
+  long pattern_builds() const { return pattern_builds_; }
+
+ private:
+  /// Lower-triangle CSC pattern of the unknown nodes, with the stencil slot of every entry.
+  void build_pattern() {
+    const int n = static_cast<int>(unknowns_.size());
+    std::vector<int> col_start(n + 1, 0);
+    std::vector<int> rows;
+    gather_.clear();
+    rows.reserve(static_cast<std::size_t>(n) * (K / 2 + 1));
+    for (int j = 0; j < n; ++j) {
+      const std::size_t J = static_cast<std::size_t>(unknowns_[j]);
+      const auto ijk = ijk_of(J);
+      for (int k = 0; k < K; ++k) {
+        if (step_[k] < 0) continue;  // lower triangle: rows I >= J
+        const auto d = St::offset(k);
+        bool inside = true;
+        for (int a = 0; a < Dim; ++a) inside = inside && ijk[a] + d[a] >= 0 && ijk[a] + d[a] < nodes_[a];
+        if (!inside) continue;
+        const std::size_t I = J + step_[k];
+        if (role_[I] != unknown) continue;
+        rows.push_back(eq_[I]);
+        gather_.push_back(J * K + k);  // row J's slot of I: L is symmetric, L_IJ = L_JI
+      }
+      col_start[j + 1] = static_cast<int>(rows.size());
+    }
+    A_.resize(n, n);
+    A_.resizeNonZeros(static_cast<Eigen::Index>(rows.size()));
+    std::copy(col_start.begin(), col_start.end(), A_.outerIndexPtr());
+    std::copy(rows.begin(), rows.end(), A_.innerIndexPtr());
+    pattern_nodes_ = unknowns_;
+    analysed_ = false;
+    ++pattern_builds_;
+  }
+  std::array<int, Dim> ijk_of(std::size_t i) const {
+    std::array<int, Dim> ijk;
+    for (int a = 0; a < Dim; ++a) {
+      ijk[a] = static_cast<int>(i % nodes_[a]);
+      i /= nodes_[a];
+    }
+    return ijk;
+  }
+
+  std::array<int, Dim> nodes_;
+  std::array<long, K> step_{};
+  std::vector<double> stencil_;  // per node: row of L over the stencil
+  std::vector<double> rhs_, dp_;
+  std::vector<std::uint8_t> role_;
+  std::vector<int> eq_, unknowns_, pattern_nodes_;
+  std::vector<std::size_t> gather_;  // per CSC entry: its slot in stencil_
+  Eigen::SparseMatrix<double> A_;
+  Eigen::VectorXd b_, x_;
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
+  bool analysed_ = false;
+  long pattern_builds_ = 0;
+};
+
+}  // namespace swmpm

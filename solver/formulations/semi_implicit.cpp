@@ -1,0 +1,774 @@
+// Formulations `semi-implicit-single-point` and `semi-implicit-double-point`: the incremental
+// fractional-step two-phase MPM of seed 001 (Xie, Navas, López-Querol 2025, §3-4.5; single-point
+// as in Yuan et al. 2023), incompressible constituents, in swmpm's signs (docs/formulations.md,
+// "Derivation in swmpm's signs", derives every line below).
+//
+// Signs: effective stress sigma' tension positive, pore pressure p compression positive (the
+// paper's p_w = -p). Units SI; 2D quantities per metre of thickness.
+//
+// The variants differ only in which points carry the water: single-point maps the water terms
+// from the soil points (each carries n, p, v_f, m_f as in explicit-single-point); double-point
+// from its own water points (State::fluid), which move with the water velocity, with the nodal
+// porosity of the soil (eqs. 46-51).
+//
+// One step (named, timed stages; numbers are the paper's algorithm steps, §4.5):
+//   (0) reorder points into scatter order every 10 steps (memory locality only)
+//   (1) shape data of soil (and water) points, active node box, scatter schedules
+//   (2) P2G: M_s, M_s v_s, nodal porosity and conductivity (soil-mass weighted, eqs. 44-47),
+//       water mass and momentum (eqs. 50-51), forces with the pressure p^t of the points
+//   (3)-(4) water predictor with the drag implicit in v_w* (eq. 53), soil predictor (eq. 52); BCs
+//   (5) pressure increment: L dp = -(1/dt) [D_s v_s* + D_w v_w*] (eqs. 60-63, L symmetric: c(n)
+//       inside the quadrature), p^{t+1} = p_D on free-surface / drained nodes; CHOLMOD
+//   (6) corrections v^{t+1} = v* - dt/M (G dp) (eqs. 64-68); BCs on v^{t+1}; pressure update
+//       (incremental, or node-wise remap eq. 77)
+//   (7) G2P (FLIP/PIC), positions; MUSL remap of the soil velocity (step 8a)
+//   (8) F, V, porosity (1 - n) J = 1 - n0, permeability law; water-point porosity and volume
+//       (step 8h with the M_s erratum, eq. 36); stress by the material model
+#include <omp.h>
+
+#include <limits>
+#include <sstream>
+
+#include "solver/formulation.hpp"
+#include "solver/formulations/pressure_poisson.hpp"
+#include "solver/formulations/registry.hpp"
+#include "solver/loads.hpp"
+#include "solver/materials/material.hpp"
+#include "solver/transfer/projection.hpp"
+#include "solver/transfer/transfer.hpp"
+
+namespace swmpm {
+namespace {
+
+constexpr double g_earth = 9.81;  // m/s^2, in k = rho_w g kappa / mu and in the drag Q = g n M_w / k
+
+/// Water and permeability of one solid material.
+struct Permeability {
+  double rho_w = 0.0;  // kg/m^3, density of the pore water
+  double k0 = 0.0;     // m/s, hydraulic conductivity at the initial porosity
+  bool kozeny_carman = false;
+  /// k(n) = k0 [n^3 / (1 - n)^2] / [n0^3 / (1 - n0)^2] (step 8g, C1 fixed by (n0, k0)).
+  double at(double n, double n0) const {
+    if (!kozeny_carman) return k0;
+    const double r = (n * n * n / ((1 - n) * (1 - n))) / (n0 * n0 * n0 / ((1 - n0) * (1 - n0)));
+    return k0 * r;
+  }
+};
+
+/// A volume fraction of a node's support below this counts as not full: the node is on the free
+/// surface of the water and gets p = 0 (Kularathna & Soga 2017, seed-notes seed 001 item 7). A
+/// node on a flat surface through the nodes has 0.5 with linear/GIMP shapes; the first row of
+/// quadratic B-spline nodes inside has 5/6.
+constexpr double kFullSupport = 0.6;
+
+template <int Dim, class Shape>
+class SemiImplicit final : public Formulation<Dim> {
+  static constexpr int S = Shape::support;
+  using Poisson = PressurePoisson<Dim, S - 1>;  // rows of L reach S - 1 nodes per axis
+  using DSt = Stencil<Dim, S - 1>;               // so do those of D
+  static constexpr int KD = DSt::K;
+  static constexpr int NP = Dim == 2 ? S * S : S * S * S;  // nodes per point
+
+ public:
+  SemiImplicit(const scene::Scene& s, const State<Dim>& state)
+      : double_point_(s.formulation == scene::Formulation::semi_implicit_double_point),
+        grid_(make_grid<Dim>(s, Shape::degree, Shape::bspline)),
+        bcs_solid_(s, grid_, state.surfaces),
+        bcs_fluid_(GridBoundary<Dim>::fluid(s, grid_, state.surfaces)),
+        loads_(s, grid_, state.solid, state.surfaces),
+        flip_(s.solver.flip),
+        damping_(s.solver.damping),
+        materials_(make_materials<Dim>(s)),
+        material_particles_(group_by_material(state.solid, s.materials.size())),
+        poisson_(grid_) {
+    const auto& st = s.solver.stabilisation;
+    if (st.pressure == "node-remap") remap_ = Remap::node;
+    else if (st.pressure == "mfvp-linear") remap_ = Remap::linear;
+    else if (st.pressure == "none") remap_ = Remap::none;
+    else
+      throw std::runtime_error("solver.stabilisation.pressure: \"" + st.pressure + "\" is not available in " + name() +
+                               " (available: node-remap, mfvp-linear, none)");
+    if constexpr (Shape::bspline)
+      throw std::runtime_error("grid.shape_function: \"" + scene::to_string(s.grid.shape_function) + "\" is not "
+                               "available in " + name() + " yet (use gimp or linear): with B-splines the pressure "
+                               "increment grows by a factor of about -5 per step near light free-surface and corner "
+                               "nodes (docs/verification.md, known problems)");
+    if (st.fbar != "none")
+      throw std::runtime_error("solver.stabilisation.fbar: F-bar is not implemented yet in this version");
+    if (!state.solid.two_phase())
+      throw std::runtime_error(name() + " needs saturated soil points (porosity in particles/solid.vtu): run swmpm "
+                               "preprocess with a body that has a solid and a fluid");
+    if (double_point_ && state.fluid.size() == 0)
+      throw std::runtime_error(name() + " needs water points (particles/fluid.vtu): run swmpm preprocess again");
+    for (std::size_t i = 0; i < s.boundaries.size(); ++i) {
+      const auto& b = s.boundaries[i];
+      if (b.fluid && *b.fluid == scene::FluidBc::pressure && face_of(b.on) < 0)
+        throw std::runtime_error("boundaries/" + std::to_string(i) + "/fluid: a prescribed pore pressure on a named "
+                                 "surface is not implemented in " + name() + " yet (grid faces only)");
+    }
+    // Per grid face: drained (p prescribed, 0 or the face's value) unless the water cannot cross it.
+    face_pressure_.fill(0.0);
+    face_drained_.fill(true);
+    for (const auto& f : bcs_fluid_.faces()) face_drained_[2 * f.axis + f.side] = false;
+    for (const auto& b : s.boundaries)
+      if (b.fluid && *b.fluid == scene::FluidBc::pressure) face_pressure_[face_of(b.on)] = b.fluid_value;
+
+    perm_.resize(s.materials.size());
+    for (std::size_t k = 0; k < s.materials.size(); ++k) {
+      const auto& m = s.materials[k];
+      if (m.model == scene::MaterialModel::fluid) continue;
+      perm_[k].k0 = m.has("hydraulic_conductivity") ? m.at("hydraulic_conductivity") : 0.0;
+      perm_[k].kozeny_carman = m.permeability_law == "kozeny-carman";
+    }
+    const ParticleSet<Dim>& ps = state.solid;
+    fluid_of_material_.assign(s.materials.size(), -1);
+    for (std::size_t p = 0; p < ps.size(); ++p) {
+      const int fm = fluid_material_of(s, ps, static_cast<int>(p));
+      if (fm < 0) continue;
+      const auto& f = s.materials[fm];
+      auto& pm = perm_[ps.material[p]];
+      fluid_of_material_[ps.material[p]] = fm;
+      pm.rho_w = f.at("density");
+      if (pm.k0 == 0.0 && s.materials[ps.material[p]].has("intrinsic_permeability"))
+        pm.k0 = s.materials[ps.material[p]].at("intrinsic_permeability") * pm.rho_w * g_earth / f.at("dynamic_viscosity");
+      if (!(pm.k0 > 0.0))
+        throw std::runtime_error("material \"" + s.materials[ps.material[p]].name +
+                                 "\": a saturated skeleton needs hydraulic_conductivity or intrinsic_permeability");
+    }
+    if (double_point_) {
+      rho_w_points_.resize(s.materials.size(), 0.0);
+      for (std::size_t k = 0; k < s.materials.size(); ++k)
+        if (s.materials[k].model == scene::MaterialModel::fluid) rho_w_points_[k] = s.materials[k].at("density");
+    }
+    const std::size_t nodes = grid_.num_nodes();
+    soil_.resize(nodes);
+    water_.resize(nodes);
+    node_.assign(nodes, NodeExtra{});
+    support_.resize(nodes);
+    for (std::size_t i = 0; i < nodes; ++i) support_[i] = support_integral(i);
+    D_solid_.assign(nodes * KD, Vec<Dim>::Zero());
+    D_water_.assign(nodes * KD, Vec<Dim>::Zero());
+    d_steps_ = DSt::steps(grid_.nodes_per_axis());
+    for (int a = 0; a < NP; ++a)
+      for (int b = 0; b < NP; ++b) {
+        std::array<int, Dim> d;
+        for (int ax = 0, ra = a, rb = b; ax < Dim; ++ax, ra /= S, rb /= S) d[ax] = rb % S - ra % S;
+        pair_slot_[a][b] = DSt::slot(d);
+        lap_slot_[a][b] = Poisson::St::slot(d);
+      }
+  }
+
+  std::string name() const override {
+    return double_point_ ? "semi-implicit-double-point" : "semi-implicit-single-point";
+  }
+
+  void step(State<Dim>& st, const StepContext& ctx) override {
+    ParticleSet<Dim>& ps = st.solid;
+    ParticleSet<Dim>& ws = double_point_ ? st.fluid : st.solid;
+    const double dt = ctx.dt;
+    Vec<Dim> b;
+    for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
+    double t0 = omp_get_wtime();
+    auto lap = [&](const char* stage) {
+      const double t1 = omp_get_wtime();
+      this->times_.add(stage, t1 - t0);
+      t0 = t1;
+    };
+
+    bool reordered = reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval);
+    if (double_point_ && st.step % reorder_interval == 0 && wschedule_.order().size() == ws.size() &&
+        !wschedule_.in_order()) {
+      wreorder_.apply(ws, wschedule_.order());
+      reordered = true;
+    }
+    if (reordered) lap("reorder");                                                          // (0)
+
+    long bad = -1;                                                                          // (1)
+    box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);
+    if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
+    if (double_point_) {
+      const NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, ws, sdw_, bad);
+      if (bad >= 0) st.health.report(bad, "fluid", "water point left the grid (or position not finite)");
+      for (int a = 0; a < Dim; ++a) {
+        box_.lo[a] = std::min(box_.lo[a], wbox.lo[a]);
+        box_.hi[a] = std::max(box_.hi[a], wbox.hi[a]);
+      }
+      transfer::build_schedule(grid_, sdw_, wschedule_);
+    }
+    collect_face_forces<Shape>(grid_, loads_, ps, st.index_of_id, ctx.t, box_, face_forces_);
+    transfer::build_schedule(grid_, sd_, schedule_);
+    clear_nodes();
+    lap("shape functions");
+
+    scatter_soil(ps, b);                                                                    // (2)
+    if (double_point_) scatter_water_points(ws, b);
+    for (const auto& ff : face_forces_) {
+      const double to_water = ff.split ? ps.n[ff.p] : 0.0;  // prescribed pore pressure: shared by porosity
+      shape::for_each_node(grid_, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) {
+        soil_.acc[i].f += (N * (1.0 - to_water)) * ff.f;
+        water_.acc[i].f += (N * to_water) * ff.f;
+      });
+    }
+    lap("p2g");
+
+    predict(dt);                                                                            // (3)-(4)
+    lap("predictor");
+
+    if (!solve_pressure(ps, ws, dt)) {                                                      // (5)
+      st.health.report(0, "fluid",
+                       "pressure Poisson system not positive definite (water touching no drained node or free "
+                       "surface has an undetermined pressure)");
+      return;
+    }
+    lap("pressure solve");
+
+    correct(ps, ws, dt);                                                                    // (6)
+    bad = update_pressure(ps, ws);
+    if (bad >= 0) st.health.report(bad, double_point_ ? "fluid" : "solid", "pore pressure not finite");
+    lap("correction");
+
+    gather(ps, ws, dt);                                                                     // (7)
+    lap("g2p + musl remap");
+
+    bad = update_soil(ps, dt);                                                              // (8)
+    if (bad >= 0) st.health.report(bad, "solid", "volume ratio J <= 0 or porosity outside (0, 1)");
+    if (double_point_) {
+      bad = update_water_points(ps, ws);
+      if (bad >= 0) st.health.report(bad, "fluid", "water-point porosity outside (0, 1]");
+    }
+    for (std::size_t k = 0; k < materials_.size(); ++k) {
+      if (material_particles_[k].empty() || !materials_[k]) continue;
+      const long m_bad = materials_[k]->update_stress(ps, material_particles_[k], dt);
+      if (m_bad >= 0) st.health.report(m_bad, "solid", "stress update failed (" + materials_[k]->name() + ")");
+    }
+    lap("stress and porosity");
+  }
+
+  double critical_time_step(const State<Dim>& st, std::string& reason) const override {
+    // Soil CFL only: the pressure is implicit (incompressible constituents) and the drag
+    // semi-implicit, so neither the water's compressibility nor k limits dt. The skeleton's P-wave
+    // carries the pore water with it (saturated density).
+    const ParticleSet<Dim>& ps = st.solid;
+    double c_max = 0.0;
+    for (std::size_t k = 0; k < materials_.size(); ++k) {
+      if (material_particles_[k].empty() || !materials_[k]) continue;
+      const double M = materials_[k]->p_wave_modulus();
+      for (int p : material_particles_[k]) {
+        const double rho_sat = (ps.m[p] + ps.n[p] * perm_[k].rho_w * ps.V[p]) / ps.V[p];
+        c_max = std::max(c_max, std::sqrt(M / rho_sat));
+      }
+    }
+    double v_max = 0.0;
+    for (const ParticleSet<Dim>* set : {&st.solid, &st.fluid}) {
+      const long n = static_cast<long>(set->size());
+#pragma omp parallel for reduction(max : v_max) if (n > parallel_threshold)
+      for (long p = 0; p < n; ++p) v_max = std::max(v_max, set->v[p].norm());
+    }
+    std::ostringstream os;
+    os << "soil P-wave CFL (c = " << c_max << " m/s with the saturated density, |v|max = " << v_max
+       << " m/s); the pore pressure is implicit and the drag semi-implicit, so neither K_w nor k limits dt";
+    reason = os.str();
+    return grid_.h() / (c_max + v_max);
+  }
+
+  double kinetic_energy(const State<Dim>& st) const override {
+    const auto& ps = st.solid;
+    if (double_point_) {
+      const auto& ws = st.fluid;
+      return fixed_order_sum(ps.size(), [&](std::size_t p) { return 0.5 * ps.m[p] * ps.v[p].squaredNorm(); }) +
+             fixed_order_sum(ws.size(), [&](std::size_t p) { return 0.5 * ws.m[p] * ws.v[p].squaredNorm(); });
+    }
+    return fixed_order_sum(ps.size(), [&](std::size_t p) {
+      return 0.5 * (ps.m[p] * ps.v[p].squaredNorm() + ps.m_f[p] * ps.v_f[p].squaredNorm());
+    });
+  }
+  /// The skeleton's stored energy; incompressible water stores none.
+  double strain_energy(const State<Dim>& st) const override {
+    const auto& ps = st.solid;
+    return fixed_order_sum(ps.size(), [&](std::size_t p) {
+      return materials_[ps.material[p]]->strain_energy(ps, static_cast<int>(p));
+    });
+  }
+  double external_power(const State<Dim>& st, const StepContext& ctx) const override {
+    const ParticleSet<Dim>& ps = st.solid;
+    Vec<Dim> b;
+    for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
+    double power = 0.0;
+    if (double_point_) {
+      power = fixed_order_sum(ps.size(), [&](std::size_t p) { return b.dot(ps.m[p] * ps.v[p]); }) +
+              fixed_order_sum(st.fluid.size(), [&](std::size_t p) { return b.dot(st.fluid.m[p] * st.fluid.v[p]); });
+    } else {
+      power = fixed_order_sum(ps.size(), [&](std::size_t p) { return b.dot(ps.m[p] * ps.v[p] + ps.m_f[p] * ps.v_f[p]); });
+    }
+    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool split) {
+      const double n = split ? ps.n[p] : 0.0;
+      power += f_p.dot((1.0 - n) * ps.v[p] + n * ps.v_f[p]);
+    });
+    return power;
+  }
+  std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
+
+ private:
+  enum class Remap { none, node, linear };
+
+  /// Per-node quantities besides the two phases' momenta and forces.
+  struct NodeExtra {
+    double mn = 0.0;        // sum S m_s n (nodal porosity x M_s, eq. 46)
+    double mk = 0.0;        // sum S m_s k (eq. 47)
+    double volume = 0.0;    // sum S V of the water points (fraction of the support filled)
+    double w_raw = 0.0;     // double-point: sum S rho_w V (M_w = n_I w_raw, eq. 50)
+    Vec<Dim> pgrad = Vec<Dim>::Zero();  // double-point: sum p V grad S of the water points
+    double n = 1.0, k = 0.0;            // nodal porosity and conductivity
+    double drag = 0.0;                  // Q_I dt (kg)
+  };
+
+  static int face_of(const std::string& on) {
+    static const char* names[] = {"x_min", "x_max", "y_min", "y_max", "z_min", "z_max"};
+    for (int f = 0; f < 6; ++f)
+      if (on == names[f]) return f;
+    return -1;
+  }
+  static int fluid_material_of(const scene::Scene& s, const ParticleSet<Dim>& ps, int p) {
+    if (!ps.fluid_material.empty() && ps.fluid_material[p] >= 0) return ps.fluid_material[p];
+    const auto& body = s.bodies[ps.body[p]];
+    return body.fluid.empty() ? -1 : static_cast<int>(s.material_index(body.fluid));
+  }
+
+  /// Integral of node i's basis function over the grid [m^Dim]: linear/GIMP h (h/2 on a grid
+  /// face); clamped B-splines of degree q (t_{i+q+1} - t_i) / (q + 1) from the open knot vector.
+  double support_integral(std::size_t i) const {
+    double v = 1.0;
+    for (int a = 0; a < Dim; ++a) {
+      const auto& ax = grid_.axis(a);
+      const int j = static_cast<int>(i % static_cast<std::size_t>(ax.nodes));
+      i /= static_cast<std::size_t>(ax.nodes);
+      if constexpr (Shape::bspline) {
+        const int q = Shape::degree;
+        auto knot = [&](int t) { return std::clamp(t - q, 0, ax.cells) * ax.h; };
+        v *= (knot(j + q + 1) - knot(j)) / (q + 1);
+      } else {
+        v *= (j == 0 || j == ax.nodes - 1) ? 0.5 * ax.h : ax.h;
+      }
+    }
+    return v;
+  }
+
+  void clear_nodes() {
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      soil_.acc[i] = {Vec<Dim>::Zero(), Vec<Dim>::Zero(), 0.0};
+      water_.acc[i] = {Vec<Dim>::Zero(), Vec<Dim>::Zero(), 0.0};
+      node_[i] = NodeExtra{};
+    });
+  }
+
+  /// (2) Soil points: M_s, M_s v_s, sum S m n, sum S m k (eqs. 44-47) and the soil's force
+  ///   f_s = sum_sp [ S m_s b - V sigma' . grad S ]  (+ single-point: (1 - n) p V grad S),
+  /// and, single-point, the water carried on the same points:
+  ///   M_w = sum S m_f, M_w v_w = sum S m_f v_f, f_w = sum [ S m_f b + n p V grad S ].
+  /// (The water's force is the weak form of -n grad p + n rho_w b, eqs. 56-57 with p_w = -p; the
+  /// soil takes the rest of the total pressure gradient, (1 - n) of it, eq. 55 minus eq. 57.)
+  void scatter_soil(const ParticleSet<Dim>& ps, const Vec<Dim>& b) {
+    const bool sp = !double_point_;
+    schedule_.run([&](int p) {
+      const double V = ps.V[p], n = ps.n[p], m = ps.m[p];
+      const double n0 = 1.0 - (1.0 - n) * V / ps.V0[p];
+      const double k = perm_[ps.material[p]].at(n, n0);
+      const Mat3 sig = to_matrix(ps.sigma[p]);
+      const double pV = sp ? ps.p[p] * V : 0.0;
+      const MatD<Dim> A = V * sig.template topLeftCorner<Dim, Dim>() - (1.0 - n) * pV * MatD<Dim>::Identity();
+      const Vec<Dim> mv = m * ps.v[p], mb = m * b;
+      const double mf = sp ? ps.m_f[p] : 0.0;
+      const Vec<Dim> mfv = sp ? Vec<Dim>(mf * ps.v_f[p]) : Vec<Dim>::Zero(), mfb = mf * b;
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
+        auto& s = soil_.acc[i];
+        s.m += N * m;
+        s.mv += N * mv;
+        s.f += N * mb - A * dN;
+        auto& e = node_[i];
+        e.mn += N * m * n;
+        e.mk += N * m * k;
+        if (sp) {
+          auto& w = water_.acc[i];
+          w.m += N * mf;
+          w.mv += N * mfv;
+          w.f += N * mfb + (n * pV) * dN;
+          e.volume += N * V;
+        }
+      });
+    });
+  }
+
+  /// (2) Water points (double-point, eqs. 50-51, 56-57): sum S rho_w V, sum S m v, sum S m (the
+  /// velocity weights of eq. 51), the raw body force sum S rho_w V b and pressure force
+  /// sum p V grad S; the node pass scales them by the nodal porosity.
+  void scatter_water_points(const ParticleSet<Dim>& ws, const Vec<Dim>& b) {
+    wschedule_.run([&](int p) {
+      const double V = ws.V[p], m = ws.m[p], rhoV = rho_w_points_[ws.material[p]] * V, pV = ws.p[p] * V;
+      const Vec<Dim> mv = m * ws.v[p], rhoVb = rhoV * b;
+      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
+        auto& w = water_.acc[i];
+        w.m += N * m;
+        w.mv += N * mv;
+        w.f += N * rhoVb;
+        auto& e = node_[i];
+        e.w_raw += N * rhoV;
+        e.pgrad += pV * dN;
+        e.volume += N * V;
+      });
+    });
+  }
+
+  /// (3)-(4) per node, with v^t = M v / M and Q = g n M_w / k (eq. 58):
+  ///   (M_w + dt Q) v_w* = M_w v_w^t + dt (f_w + Q v_s^t)          (eq. 53)
+  ///   M_s (v_s* - v_s^t) = dt f_s + dt Q (v_w* - v_s^t)           (eq. 52 minus eq. 53)
+  /// then the velocity boundary conditions of each phase on v*.
+  void predict(double dt) {
+    const double alpha = damping_;
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      auto& s = soil_.acc[i];
+      auto& w = water_.acc[i];
+      auto& e = node_[i];
+      const bool has_s = s.m > transfer::empty_node_mass;
+      e.n = has_s ? e.mn / s.m : 1.0;
+      e.k = has_s ? e.mk / s.m : 0.0;
+      Vec<Dim> vw = Vec<Dim>::Zero();
+      if (double_point_) {
+        vw = w.m > transfer::empty_node_mass ? Vec<Dim>(w.mv / w.m) : Vec<Dim>::Zero();
+        // M_w = n_I sum S rho_w V (eq. 50); forces n_I (...) (eqs. 56-57); the soil takes (1 - n_I).
+        w.m = e.n * e.w_raw;
+        w.f = e.n * (w.f + e.pgrad);  // body force and pressure, both x n_I
+        s.f += (1.0 - e.n) * e.pgrad;
+      } else if (w.m > transfer::empty_node_mass) {
+        vw = w.mv / w.m;
+      }
+      const bool has_w = w.m > transfer::empty_node_mass;
+      const Vec<Dim> vs = has_s ? Vec<Dim>(s.mv / s.m) : Vec<Dim>::Zero();
+      soil_.vL[i] = vs;
+      water_.vL[i] = vw;
+      e.drag = has_s && has_w && e.k > 0.0 ? dt * g_earth * e.n * w.m / e.k : 0.0;  // Q dt
+      const Vec<Dim> vw_star = has_w ? Vec<Dim>((w.m * vw + dt * w.f + e.drag * vs) / (w.m + e.drag)) : Vec<Dim>::Zero();
+      const Vec<Dim> fs = local_damping<Dim>(s.f, vs, alpha);
+      soil_.v[i] = has_s ? Vec<Dim>(vs + (dt * fs + e.drag * (vw_star - vs)) / s.m) : Vec<Dim>::Zero();
+      water_.v[i] = vw_star;
+    });
+    bcs_solid_.apply(grid_, box_, soil_.v, false);
+    bcs_fluid_.apply(grid_, box_, water_.v, false);
+  }
+
+  /// (5) eqs. 60-63 in swmpm's signs (docs/formulations.md):
+  ///   dt sum_J L_IJ dp_J = -(D^s v_s* + D^w v_w*)_I
+  ///   D^s_IK = sum_sp (1 - n) V S_I grad S_K,  D^w_IK = sum_wp n V S_I grad S_K   (eqs. 62-63)
+  ///   L_IJ = sum_p V c_p grad S_I . grad S_J,  c = (1 - n)/rho_s (soil points) + n/rho_w (water)
+  /// (eq. 61 with c inside the quadrature: L symmetric, CHOLMOD). The corrections (6) use the
+  /// transpose of D, the weak pressure gradient. The exact projection D M^-1 D^T in place of L
+  /// was tried: stable with B-splines, but its two-cell stencil decouples the pressure
+  /// (Terzaghi on GIMP 30 % RMS error instead of 0.09 %) — docs/verification.md.
+  /// Prescribed nodes: grid faces the water drains through (p = 0, or the face's value) and the
+  /// free surface (support less than kFullSupport full); dp_D = p_D - p^t(x_D), with p^t at the
+  /// node from the linear projection of the points' pressures (exact for a hydrostatic field).
+  bool solve_pressure(const ParticleSet<Dim>& ps, const ParticleSet<Dim>& ws, double dt) {
+    const auto& sdw = double_point_ ? sdw_ : sd_;
+    const auto& wsched = double_point_ ? wschedule_ : schedule_;
+    linear_.fit(grid_, box_, wsched, sdw, ws.x, [&](int p) { return ws.V[p]; }, [&](int p) { return ws.p[p]; });
+    poisson_.clear(grid_, box_);
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      std::fill_n(D_solid_.data() + i * KD, KD, Vec<Dim>::Zero());
+      std::fill_n(D_water_.data() + i * KD, KD, Vec<Dim>::Zero());
+    });
+    const auto& nn = grid_.nodes_per_axis();
+    grid_.for_each_node(box_, [&](std::size_t i, const auto& ijk) {
+      if (!(water_.acc[i].m > transfer::empty_node_mass)) return;
+      int face = -1;
+      for (int a = 0; a < Dim && face < 0; ++a) {
+        if (ijk[a] == 0 && face_drained_[2 * a]) face = 2 * a;
+        if (ijk[a] == nn[a] - 1 && face_drained_[2 * a + 1]) face = 2 * a + 1;
+      }
+      const bool surface = node_[i].volume < kFullSupport * support_[i];
+      if (face >= 0 || surface) {
+        const double p_bar = face >= 0 ? face_pressure_[face] : 0.0;
+        poisson_.prescribe(i, p_bar - linear_.at_node(i));
+      } else {
+        poisson_.set_unknown(i);
+      }
+    });
+    // Soil points: D^s; single-point also D^w from the same points.
+    schedule_.run([&](int p) {
+      const double V = ps.V[p], n = ps.n[p];
+      scatter_divergence(sd_[p], (1.0 - n) * V, D_solid_);
+      if (!double_point_) scatter_divergence(sd_[p], n * V, D_water_);
+      {
+        const double rho_s = ps.m[p] / ((1.0 - n) * V);
+        double c = (1.0 - n) / rho_s;
+        if (!double_point_) c += n / perm_[ps.material[p]].rho_w;
+        add_laplacian(sd_[p], V * c);
+      }
+    });
+    if (double_point_)
+      wschedule_.run([&](int p) {
+        scatter_divergence(sdw_[p], ws.n[p] * ws.V[p], D_water_);
+        add_laplacian(sdw_[p], ws.V[p] * ws.n[p] / rho_w_points_[ws.material[p]]);
+      });
+    const double inv_dt = 1.0 / dt;
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto& ijk) {
+      if (poisson_.role(i) == Poisson::inactive) return;
+      // Right-hand side -(1/dt)(D^s v_s* + D^w v_w*)_I.
+      const Vec<Dim>* Ds_i = D_solid_.data() + i * KD;
+      const Vec<Dim>* Dw_i = D_water_.data() + i * KD;
+      double div = 0.0;
+      for (int kk = 0; kk < KD; ++kk) {
+        if (!inside(ijk, DSt::offset(kk))) continue;
+        const std::size_t Kn = i + d_steps_[kk];
+        div += Ds_i[kk].dot(soil_.v[Kn]) + Dw_i[kk].dot(water_.v[Kn]);
+      }
+      poisson_.rhs(i) = -inv_dt * div;
+    });
+    return poisson_.solve(grid_, box_);
+  }
+
+  /// Whether node ijk + d lies in this step's active box (rows outside it hold stale values).
+  bool inside(const std::array<int, Dim>& ijk, const std::array<int, Dim>& d) const {
+    for (int a = 0; a < Dim; ++a)
+      if (ijk[a] + d[a] < box_.lo[a] || ijk[a] + d[a] > box_.hi[a]) return false;
+    return true;
+  }
+
+  /// L_IJ += c grad S_I . grad S_J (eq. 61 with c inside the quadrature).
+  void add_laplacian(const shape::ShapeData<Dim, S>& sd, double c) {
+    std::array<std::size_t, NP> node;
+    std::array<Vec<Dim>, NP> grad;
+    int a = 0;
+    shape::for_each_node(grid_, sd, [&](std::size_t i, double, const Vec<Dim>& dN) {
+      node[a] = i;
+      grad[a] = dN;
+      ++a;
+    });
+    for (int r = 0; r < NP; ++r) {
+      double* row = poisson_.row(node[r]);
+      const Vec<Dim> g = c * grad[r];
+      for (int k = 0; k < NP; ++k) row[lap_slot_[r][k]] += g.dot(grad[k]);
+    }
+  }
+
+  /// D_IK += c S_I grad S_K for one point's node pairs (through the stripe schedule).
+  void scatter_divergence(const shape::ShapeData<Dim, S>& sd, double c, std::vector<Vec<Dim>>& D) const {
+    std::array<std::size_t, NP> node;
+    std::array<double, NP> N;
+    std::array<Vec<Dim>, NP> grad;
+    int a = 0;
+    shape::for_each_node(grid_, sd, [&](std::size_t i, double w, const Vec<Dim>& dN) {
+      node[a] = i;
+      N[a] = w;
+      grad[a] = dN;
+      ++a;
+    });
+    for (int r = 0; r < NP; ++r) {
+      if (N[r] == 0.0) continue;
+      Vec<Dim>* row = D.data() + node[r] * KD;
+      const double cN = c * N[r];
+      for (int k = 0; k < NP; ++k) row[pair_slot_[r][k]] += cN * grad[k];
+    }
+  }
+
+  /// (6) eqs. 64-68 with the weak gradient (the transpose of D):
+  ///   M_sK (v_sK^{t+1} - v_sK*) = dt sum_I D^s_IK dp_I,   M_wK (v_wK^{t+1} - v_wK*) = dt sum_I D^w_IK dp_I
+  /// (= dt sum_p (1 - n) V dp(x_p) grad S_K: the weak form of -(1 - n) grad dp); then the boundary
+  /// conditions on v^{t+1} (step 6d erratum: on v^{t+1}, not v*).
+  void correct(const ParticleSet<Dim>&, const ParticleSet<Dim>&, double dt) {
+    const auto& dp = poisson_.dp();
+    grid_.parallel_for_each_node(box_, [&](std::size_t k, const auto& ijk) {
+      Vec<Dim> js = Vec<Dim>::Zero(), jw = Vec<Dim>::Zero();
+      for (int ee = 0; ee < KD; ++ee) {  // rows I = K - e hold D_IK at offset +e
+        const auto e = DSt::offset(ee);
+        std::array<int, Dim> d;
+        for (int a = 0; a < Dim; ++a) d[a] = -e[a];
+        if (!inside(ijk, d)) continue;
+        const std::size_t I = k - d_steps_[ee];
+        if (dp[I] == 0.0) continue;
+        js += dp[I] * D_solid_[I * KD + ee];
+        jw += dp[I] * D_water_[I * KD + ee];
+      }
+      const double Ms = soil_.acc[k].m, Mw = water_.acc[k].m;
+      if (Ms > transfer::empty_node_mass) soil_.v[k] += (dt / Ms) * js;
+      if (Mw > transfer::empty_node_mass) water_.v[k] += (dt / Mw) * jw;
+    });
+    bcs_solid_.apply(grid_, box_, soil_.v, true);
+    bcs_fluid_.apply(grid_, box_, water_.v, false);
+  }
+
+  /// (6)-(7c) p^{t+1} at the water points: `none` p += sum S dp (incremental); `node-remap`
+  /// p = sum S (pbar_I + dp_I) with pbar_I the water-mass-weighted nodal average (eq. 77);
+  /// `mfvp-linear` the same with the linear projection (reproduces linear fields). Double-point:
+  /// the soil points take the interpolated p^{t+1} too (for output and monitors).
+  long update_pressure(ParticleSet<Dim>& ps, ParticleSet<Dim>& ws) {
+    const auto& sdw = double_point_ ? sdw_ : sd_;
+    const auto& dp = poisson_.dp();
+    if (remap_ == Remap::node) {
+      const auto& wsched = double_point_ ? wschedule_ : schedule_;
+      if (double_point_)
+        constant_.fit(grid_, box_, wsched, sdw, ws.x, [&](int p) { return ws.m[p]; }, [&](int p) { return ws.p[p]; });
+      else
+        constant_.fit(grid_, box_, wsched, sdw, ws.x, [&](int p) { return ws.m_f[p]; }, [&](int p) { return ws.p[p]; });
+    }
+    auto new_pressure = [&](const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x, double p_old) {
+      double inc = 0.0;
+      shape::for_each_node(grid_, sd, [&](std::size_t i, double N, const Vec<Dim>&) { inc += N * dp[i]; });
+      switch (remap_) {
+        case Remap::none: return p_old + inc;
+        case Remap::node: return constant_.at_point(grid_, sd, x) + inc;
+        case Remap::linear: return linear_.at_point(grid_, sd, x) + inc;
+      }
+      return p_old + inc;
+    };
+    const long n = static_cast<long>(ws.size());
+    long bad = transfer::no_particle;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      ws.p[p] = new_pressure(sdw[p], ws.x[p], ws.p[p]);
+      if (!std::isfinite(ws.p[p])) bad = std::min(bad, p);
+    }
+    if (double_point_) {
+      const long m = static_cast<long>(ps.size());
+#pragma omp parallel for schedule(static) if (m > parallel_threshold)
+      for (long p = 0; p < m; ++p) {
+        double value = 0.0;
+        shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+          value += N * (linear_.at_node(i) + dp[i]);
+        });
+        ps.p[p] = value;
+      }
+    }
+    return bad == transfer::no_particle ? -1 : bad;
+  }
+
+  /// (7) FLIP/PIC for both phases, soil positions with v_s^{t+1} (water points with v_w^{t+1}),
+  /// and the MUSL remap of the soil momentum (step 8a) before the strain increment.
+  void gather(ParticleSet<Dim>& ps, ParticleSet<Dim>& ws, double dt) {
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { soil_.acc[i].mv.setZero(); });
+    schedule_.run([&](int p) {
+      Vec<Dim> vs = Vec<Dim>::Zero(), vs_old = Vec<Dim>::Zero(), vw = Vec<Dim>::Zero(), vw_old = Vec<Dim>::Zero();
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        vs += N * soil_.v[i];
+        vs_old += N * soil_.vL[i];
+        vw += N * water_.v[i];
+        vw_old += N * water_.vL[i];
+      });
+      ps.v[p] = flip_ * (ps.v[p] + vs - vs_old) + (1.0 - flip_) * vs;
+      // Single-point: the pore water's velocity; double-point: the water velocity at the soil
+      // point, for output (the water points carry the water's own).
+      ps.v_f[p] = double_point_ ? vw : Vec<Dim>(flip_ * (ps.v_f[p] + vw - vw_old) + (1.0 - flip_) * vw);
+      ps.x[p] += dt * vs;
+      const Vec<Dim> mv = ps.m[p] * ps.v[p];
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) { soil_.acc[i].mv += N * mv; });
+    });
+    if (double_point_) {
+      const long n = static_cast<long>(ws.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+      for (long p = 0; p < n; ++p) {
+        Vec<Dim> vw = Vec<Dim>::Zero(), vw_old = Vec<Dim>::Zero();
+        shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+          vw += N * water_.v[i];
+          vw_old += N * water_.vL[i];
+        });
+        ws.v[p] = flip_ * (ws.v[p] + vw - vw_old) + (1.0 - flip_) * vw;
+        ws.x[p] += dt * vw;
+      }
+    }
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      const auto& s = soil_.acc[i];
+      soil_.v[i] = s.m > transfer::empty_node_mass ? Vec<Dim>(s.mv / s.m) : Vec<Dim>::Zero();
+    });
+    bcs_solid_.apply(grid_, box_, soil_.v, false);
+  }
+
+  /// (8) L_s = sum v_s (x) grad S with the remapped velocities; F, V; porosity from
+  /// (1 - n) J = 1 - n0 (step 8f); single-point pore-water mass n rho_w V.
+  long update_soil(ParticleSet<Dim>& ps, double dt) {
+    const long n = static_cast<long>(ps.size());
+    long bad = transfer::no_particle;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      MatD<Dim> L = MatD<Dim>::Zero();
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double, const Vec<Dim>& dN) {
+        L.noalias() += soil_.v[i] * dN.transpose();
+      });
+      ps.L[p] = L;
+      Mat3 dF = Mat3::Identity();
+      dF.template topLeftCorner<Dim, Dim>() = transfer::deformation_increment<Dim>(L, dt);
+      ps.F[p] = dF * ps.F[p];
+      const double V_old = ps.V[p];
+      const double J = ps.F[p].determinant();
+      ps.V[p] = J * ps.V0[p];
+      ps.n[p] = 1.0 - (1.0 - ps.n[p]) * V_old / ps.V[p];
+      ps.m_f[p] = ps.n[p] * perm_[ps.material[p]].rho_w * ps.V[p];
+      if (!(J > 0.0) || !(ps.n[p] > 0.0 && ps.n[p] < 1.0)) bad = std::min(bad, p);
+    }
+    return bad == transfer::no_particle ? -1 : bad;
+  }
+
+  /// (8h)-(8i) double-point: nodal porosity from the updated soil points (soil-mass weighted,
+  /// divided by M_s: erratum of step 8h), interpolated at the water points (1 where no soil), and
+  /// their volume V = m / (n rho_w) (eq. 36: n V = n0 V0). Shape data of the start of the step.
+  long update_water_points(const ParticleSet<Dim>& ps, ParticleSet<Dim>& ws) {
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { node_[i].mn = 0.0; });
+    schedule_.run([&](int p) {
+      const double mn = ps.m[p] * ps.n[p];
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) { node_[i].mn += N * mn; });
+    });
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      const double Ms = soil_.acc[i].m;
+      node_[i].n = Ms > transfer::empty_node_mass ? node_[i].mn / Ms : 1.0;
+    });
+    const long n = static_cast<long>(ws.size());
+    long bad = transfer::no_particle;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      double np = 0.0;
+      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) { np += N * node_[i].n; });
+      ws.n[p] = np;
+      ws.V[p] = ws.m[p] / (np * rho_w_points_[ws.material[p]]);
+      if (!(np > 0.0 && np <= 1.0 + 1e-12)) bad = std::min(bad, p);
+    }
+    return bad == transfer::no_particle ? -1 : bad;
+  }
+
+  bool double_point_;
+  Grid<Dim> grid_;
+  GridBoundary<Dim> bcs_solid_, bcs_fluid_;
+  ParticleLoads<Dim> loads_;
+  double flip_, damping_;
+  Remap remap_ = Remap::node;
+  std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
+  std::vector<std::vector<int>> material_particles_;
+  std::vector<Permeability> perm_;          // per solid material
+  std::vector<int> fluid_of_material_;      // per solid material: its pore water's material
+  std::vector<double> rho_w_points_;        // per fluid material (double-point water points)
+  std::array<bool, 6> face_drained_{};
+  std::array<double, 6> face_pressure_{};   // Pa, prescribed p on drained faces (0 unless `pressure`)
+  NodeFields<Dim> soil_, water_;
+  std::vector<NodeExtra> node_;
+  std::vector<double> support_;  // per node: integral of its basis function over the grid
+  Poisson poisson_;
+  std::vector<Vec<Dim>> D_solid_, D_water_;  // per node: row I of D^s, D^w over the D stencil
+  std::array<long, KD> d_steps_{};
+  std::array<std::array<int, NP>, NP> pair_slot_{}, lap_slot_{};
+  NodeProjection<Dim, S, 1> linear_;
+  NodeProjection<Dim, S, 0> constant_;
+  NodeBox<Dim> box_;
+  std::vector<shape::ShapeData<Dim, S>> sd_, sdw_;
+  std::vector<FaceForce<Dim, S>> face_forces_;
+  StripeSchedule schedule_, wschedule_;
+  Reorder<Dim> reorder_, wreorder_;
+  static constexpr long reorder_interval = 10;  // steps
+};
+
+}  // namespace
+
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_semi_implicit(const scene::Scene& s, const State<Dim>& state) {
+  return make_for_shape<SemiImplicit, Dim>(s, state);
+}
+
+template std::unique_ptr<Formulation<2>> make_semi_implicit<2>(const scene::Scene&, const State<2>&);
+template std::unique_ptr<Formulation<3>> make_semi_implicit<3>(const scene::Scene&, const State<3>&);
+
+}  // namespace swmpm

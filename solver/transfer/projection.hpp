@@ -1,0 +1,118 @@
+// Node-wise least-squares projection of a particle field (the node-based map/remap of seed 001
+// eq. 77, and its linear-basis generalisation):
+//
+//   per node I:  H_I = sum_p w_p N_Ip Q_p Q_p^T,   a_I = H_I^-1 sum_p w_p N_Ip Q_p f_p
+//   at a point:  f(x) = sum_I N_I(x) Q(x)^T a_I
+//
+// with Q = [1] (Order 0: a_I is the w-weighted nodal average of eq. 77) or Q = [1, d] (Order 1),
+// d = (x - x_I) / h centred at the node, so that a_I[0] is the fitted value AT the node and a
+// linear field is reproduced exactly (also at nodes on a free surface, where a plain average is
+// biased towards the interior). A node whose H_I is near-singular (pivot ratio < 1e-8: too few
+// particles for the basis) falls back to Order 0.
+#pragma once
+
+#include <algorithm>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "solver/grid/grid.hpp"
+#include "solver/shape/shape.hpp"
+#include "solver/transfer/schedule.hpp"
+
+namespace swmpm {
+
+template <int Dim, int S, int Order>
+class NodeProjection {
+ public:
+  static constexpr int NQ = Order == 0 ? 1 : 1 + Dim;
+  static constexpr int NH = NQ * (NQ + 1) / 2, NB = NH + NQ;
+  using VecQ = Eigen::Matrix<double, NQ, 1>;
+  using MatQ = Eigen::Matrix<double, NQ, NQ>;
+
+  /// Fits the nodes of `box` to the points' values: weight(p) and value(p) per point, shape data
+  /// sd[p] and position x[p] (the points the shape data were evaluated at).
+  template <class Weight, class Value>
+  void fit(const Grid<Dim>& g, const NodeBox<Dim>& box, const StripeSchedule& schedule,
+           const std::vector<shape::ShapeData<Dim, S>>& sd, const std::vector<Vec<Dim>>& x, Weight&& weight,
+           Value&& value) {
+    if (blocks_.size() != g.num_nodes() * NB) blocks_.assign(g.num_nodes() * NB, 0.0);
+    g.parallel_for_each_node(box, [&](std::size_t i, const auto&) { std::fill_n(block(i), NB, 0.0); });
+    schedule.run([&](int p) {
+      const double w = weight(p), f = value(p);
+      if (w == 0.0) return;
+      for_each_node_offset(g, sd[p], x[p], [&](std::size_t i, double N, const VecQ& q) {
+        if (N <= 0.0) return;
+        double* blk = block(i);
+        const double wN = w * N;
+        for (int r = 0, k = 0; r < NQ; ++r) {
+          const double s_r = wN * q[r];
+          for (int c = r; c < NQ; ++c) blk[k++] += s_r * q[c];
+        }
+        for (int r = 0; r < NQ; ++r) blk[NH + r] += wN * f * q[r];
+      });
+    });
+    g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
+      double* blk = block(i);
+      if (!(blk[0] > 0.0)) return;
+      Eigen::Map<VecQ> rhs(blk + NH);
+      if constexpr (NQ > 1) {
+        MatQ H;
+        for (int r = 0, k = 0; r < NQ; ++r)
+          for (int c = r; c < NQ; ++c) H(r, c) = H(c, r) = blk[k++];
+        Eigen::LDLT<MatQ> ldlt(H);
+        const double cond = ldlt.vectorD().cwiseAbs().minCoeff() / ldlt.vectorD().cwiseAbs().maxCoeff();
+        VecQ a = VecQ::Zero();
+        if (ldlt.info() == Eigen::Success && cond > 1e-8) a = ldlt.solve(rhs);
+        else a[0] = rhs[0] / blk[0];
+        rhs = a;
+      } else {
+        rhs[0] /= blk[0];
+      }
+    });
+  }
+
+  /// Whether node i received any weight in the last fit.
+  bool has(std::size_t i) const { return blocks_[i * NB] > 0.0; }
+  /// The fitted value at node i (a_I[0]: the basis is centred at the node).
+  double at_node(std::size_t i) const { return has(i) ? blocks_[i * NB + NH] : 0.0; }
+  /// The projected field at a point with shape data sd at x (only nodes with weight count).
+  double at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x) const {
+    double value = 0.0;
+    for_each_node_offset(g, sd, x, [&](std::size_t i, double N, const VecQ& q) {
+      if (N <= 0.0 || !has(i)) return;
+      value += N * q.dot(Eigen::Map<const VecQ>(blocks_.data() + i * NB + NH));
+    });
+    return value;
+  }
+
+ private:
+  double* block(std::size_t i) { return blocks_.data() + i * NB; }
+
+  /// fn(node, N_Ip, Q(d)) over a point's nodes in for_each_node's order.
+  template <class Fn>
+  static void for_each_node_offset(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x,
+                                   Fn&& fn) {
+    const double inv_h = 1.0 / g.h();
+    double off[Dim][S];
+    for (int a = 0; a < Dim; ++a)
+      for (int k = 0; k < S; ++k) off[a][k] = (x[a] - g.axis(a).node_x[sd.base[a] + k]) * inv_h;
+    VecQ q;
+    q[0] = 1.0;
+    shape::for_each_node(g, sd, [&, k = 0](std::size_t i, double N, const Vec<Dim>&) mutable {
+      if constexpr (Order == 1) {
+        int r = k;
+        for (int a = 0; a < Dim; ++a) {
+          q[1 + a] = off[a][r % S];
+          r /= S;
+        }
+      }
+      ++k;
+      fn(i, N, q);
+    });
+  }
+
+  std::vector<double> blocks_;  // per node: packed upper triangle of H_I, then rhs -> a_I
+};
+
+}  // namespace swmpm

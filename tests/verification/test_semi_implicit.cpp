@@ -1,0 +1,157 @@
+// Semi-implicit formulations (seed 001): B1 Terzaghi for both variants, E1 hydrostatic layer at
+// rest for both variants, and the pressure stabilisation switch measured on both.
+//
+// B1 (seed 001 §5.1, Table 1): column 0.1 x 1.0 m, cells 0.025 m, 2x2 points per cell (640 per
+// phase), E = 10 MPa, nu = 0, rho_s = 2650, rho_w = 1000, n0 = 0.3, k = 1e-3 m/s, no gravity;
+// sides and base roller/fixed and impermeable, top free and drained; q = 10 kPa applied at t = 0
+// and held; dt = 1e-4 s. Incompressible constituents: the undrained response is p = q at once and
+// c_v = k E_oed / gamma_w. Terzaghi (drained top, z depth below the top; seed-notes item 4):
+//   p / q = sum_m (2/M) sin(M z / H) exp(-M^2 Tv),  M = (2m + 1) pi / 2,  Tv = c_v t / H^2.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "scene/scene.hpp"
+#include "support/indicators.hpp"
+#include "support/run_helpers.hpp"
+
+namespace {
+
+using nlohmann::json;
+
+constexpr double H = 1.0, q = 1.0e4, E = 1.0e7, k = 1.0e-3, rho_w = 1000.0, g = 9.81;
+
+double terzaghi(double z, double Tv) {
+  double sum = 0.0;
+  for (int m = 0; m < 200; ++m) {
+    const double M = (2 * m + 1) * M_PI / 2;
+    sum += 2.0 / M * std::sin(M * z / H) * std::exp(-M * M * Tv);
+  }
+  return sum;
+}
+
+struct Profiles {
+  double worst_rms = 0.0, first_rms = 0.0, last_rms = 0.0;
+  int frames = 0;
+  double base_at_end = 0.0;  // Pa, pore pressure of the monitor at the base at the last frame
+};
+
+/// Runs B1 with `formulation` and `pressure` stabilisation to `end`; RMS error of p/q over every
+/// frame from t = 0.05 s.
+Profiles run_b1(const std::string& formulation, const std::string& pressure, double end, const std::string& name) {
+  json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene.json");
+  s["formulation"] = formulation;
+  s["solver"]["stabilisation"]["pressure"] = pressure;
+  s["time"]["end"] = end;
+  const std::string run = swmpm::testing::run_scene(s, name);
+  const double c_v = k * E / (rho_w * g);  // nu = 0: E_oed = E; incompressible water and grains
+  Profiles r;
+  for (const auto& e : swmpm::scene::read_pvd(run + "/output/results.pvd")) {
+    if (e.group != "solid" || e.time < 0.049) continue;
+    const auto f = swmpm::scene::read_vtu(run + "/output/" + e.file);
+    const auto& pp = f.get("pore_pressure", e.file).values;
+    const auto& d = f.get("displacement", e.file).values;
+    const double Tv = c_v * e.time / (H * H);
+    double err2 = 0.0;
+    for (std::size_t p = 0; p < f.size(); ++p) {
+      const double z = H - (f.points[p][1] - d[3 * p + 1]);
+      err2 += std::pow(pp[p] / q - terzaghi(z, Tv), 2);
+    }
+    const double rms = std::sqrt(err2 / static_cast<double>(f.size()));
+    if (r.frames == 0) r.first_rms = rms;
+    r.last_rms = rms;
+    r.worst_rms = std::max(r.worst_rms, rms);
+    ++r.frames;
+  }
+  std::printf("B1 %s, %s: %d frames, RMS error of p/q: first %.4f, worst %.4f, last %.4f\n", formulation.c_str(),
+              pressure.c_str(), r.frames, r.first_rms, r.worst_rms, r.last_rms);
+  return r;
+}
+
+}  // namespace
+
+// Measured (cells 0.025, dt 1e-4, to 1 s): single-point RMS 0.09 % at Tv = 0.05, 0.05 % at Tv = 1;
+// double-point 0.08 % and 0.02 %. The tolerance is issue 4's 3 % bound tightened to 0.5 %.
+TEST(SemiImplicit, B1TerzaghiSinglePoint) {
+  const Profiles r = run_b1("semi-implicit-single-point", "mfvp-linear", 0.5, "b1-sp");
+  EXPECT_GE(r.frames, 9);
+  EXPECT_LT(r.worst_rms, 0.005);
+}
+
+TEST(SemiImplicit, B1TerzaghiDoublePoint) {
+  const Profiles r = run_b1("semi-implicit-double-point", "mfvp-linear", 0.5, "b1-dp");
+  EXPECT_GE(r.frames, 9);
+  EXPECT_LT(r.worst_rms, 0.005);
+}
+
+// The paper's node-wise map/remap (eq. 77, constant basis) is stable too, but biases the nodes of
+// the drained top towards the interior: measured 0.43 % RMS at Tv = 0.05 (0.09 % with the linear
+// basis), converging as the gradient at the top flattens.
+TEST(SemiImplicit, B1TerzaghiNodeRemapIsLessAccurate) {
+  const Profiles remap = run_b1("semi-implicit-single-point", "node-remap", 0.2, "b1-remap");
+  EXPECT_LT(remap.worst_rms, 0.03);
+  EXPECT_GT(remap.first_rms, 0.003);  // the bias is real: more than 3x the linear basis's error
+}
+
+namespace {
+
+struct Rest {
+  double p_max = 0.0, v_s = 0.0, v_w = 0.0;
+};
+
+/// E1 (the hydrostatic-layer example, 2 m of saturated soil under gravity, geostatic K0 stress,
+/// hydrostatic pore pressure) to 0.3 s with `formulation`: largest pressure error (of rho_w g H)
+/// and speeds over all frames of the soil points.
+Rest run_e1(const std::string& formulation, const std::string& pressure, const std::string& name) {
+  json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/hydrostatic-layer/scene.json");
+  s["formulation"] = formulation;
+  s["solver"]["stabilisation"] = {{"pressure", pressure}};
+  const std::string run = swmpm::testing::run_scene(s, name, 1);
+  const double Hl = 2.0;
+  Rest r;
+  for (const auto& e : swmpm::scene::read_pvd(run + "/output/results.pvd")) {
+    if (e.group != "solid") continue;
+    const auto f = swmpm::scene::read_vtu(run + "/output/" + e.file);
+    const auto& pp = f.get("pore_pressure", e.file).values;
+    const auto& u = f.get("displacement", e.file).values;
+    const auto& vs = f.get("velocity", e.file).values;
+    const auto& vf = f.get("fluid_velocity", e.file).values;
+    for (std::size_t p = 0; p < f.size(); ++p) {
+      const double depth = Hl - (f.points[p][1] - u[3 * p + 1]);
+      r.p_max = std::max(r.p_max, std::abs(pp[p] - rho_w * g * depth) / (rho_w * g * Hl));
+      r.v_s = std::max(r.v_s, std::hypot(vs[3 * p], vs[3 * p + 1]));
+      r.v_w = std::max(r.v_w, std::hypot(vf[3 * p], vf[3 * p + 1]));
+    }
+  }
+  std::printf("E1 %s, %s: p error max %.3g (of rho_w g H), max |v_s| %.3g m/s, max |v_w| %.3g m/s\n",
+              formulation.c_str(), pressure.c_str(), r.p_max, r.v_s, r.v_w);
+  return r;
+}
+
+}  // namespace
+
+// The linear nodal projection reproduces the hydrostatic field at every node, the free-surface
+// nodes included, so the layer stays at rest to round-off (measured: p 5e-17, speeds 1e-16 m/s).
+TEST(SemiImplicit, E1HydrostaticLayerStaysAtRestSinglePoint) {
+  const Rest r = run_e1("semi-implicit-single-point", "mfvp-linear", "e1-si-sp");
+  EXPECT_LT(r.p_max, 1e-9);
+  EXPECT_LT(r.v_s, 1e-12);
+  EXPECT_LT(r.v_w, 1e-12);
+}
+
+TEST(SemiImplicit, E1HydrostaticLayerStaysAtRestDoublePoint) {
+  const Rest r = run_e1("semi-implicit-double-point", "mfvp-linear", "e1-si-dp");
+  EXPECT_LT(r.p_max, 1e-9);
+  EXPECT_LT(r.v_s, 1e-12);
+  EXPECT_LT(r.v_w, 1e-12);
+}
+
+// Eq. 77's constant-basis remap does not keep the layer at rest: the average at a surface node is
+// biased (measured 3.4 % of rho_w g H and 1e-3 m/s of water flow). This is why the semi-implicit
+// default is the linear basis.
+TEST(SemiImplicit, E1NodeRemapDisturbsTheLayer) {
+  const Rest r = run_e1("semi-implicit-single-point", "node-remap", "e1-si-remap");
+  EXPECT_GT(r.p_max, 0.01);
+  EXPECT_LT(r.p_max, 0.1);
+  EXPECT_GT(r.v_w, 1e-4);
+}
