@@ -173,14 +173,40 @@ int postprocess_command(const std::string& run_dir, const PostArgs& a, bool quie
 /// What `swmpm element SCENE.json ...` was given.
 struct ElementArgs {
   std::string material, test, out, plot;
-  double p0 = 0.0, axial_strain = 0.0;
+  std::vector<double> p0;  // one run per value
+  double axial_strain = 0.0;
   int steps = 100;
 };
 
+/// The element CSV: axial_strain, p, q, volumetric_strain (interface.md), then the model's state
+/// columns (Nor-Sand: specific_volume, state_parameter), excess_pore_pressure for the undrained
+/// test, and p0 when several --p0 were given (the runs one after another).
+swmpm::post::CsvResult element_table(const std::vector<swmpm::ElementResult>& runs) {
+  swmpm::post::CsvResult csv;
+  const swmpm::ElementResult& first = runs.front();
+  const bool undrained = first.test == swmpm::ElementTest::undrained_triaxial;
+  csv.names = {"axial_strain", "p", "q", "volumetric_strain"};
+  for (const auto& n : first.state_names) csv.names.push_back(n);
+  // Conventional undrained triaxial: constant cell pressure, u = p0 + q/3 − p′ [Pa].
+  if (undrained) csv.names.push_back("excess_pore_pressure");
+  if (runs.size() > 1) csv.names.push_back("p0");
+  for (const auto& r : runs) {
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      std::vector<double> row{r.axial_strain[i], r.p[i], r.q[i], r.volumetric_strain[i]};
+      for (const auto& c : r.state_columns) row.push_back(c[i]);
+      if (undrained) row.push_back(r.p0 + r.q[i] / 3.0 - r.p[i]);
+      if (runs.size() > 1) row.push_back(r.p0);
+      csv.rows.push_back(std::move(row));
+    }
+  }
+  return csv;
+}
+
 int element_command(const swmpm::scene::Scene& scene, const ElementArgs& a, bool quiet) {
-  swmpm::ElementResult r;
+  std::vector<swmpm::ElementResult> runs;
   try {
-    r = swmpm::run_element(scene, a.material, swmpm::parse_element_test(a.test), a.p0, a.axial_strain, a.steps);
+    for (double p0 : a.p0)
+      runs.push_back(swmpm::run_element(scene, a.material, swmpm::parse_element_test(a.test), p0, a.axial_strain, a.steps));
   } catch (const std::invalid_argument& e) {
     std::cerr << "swmpm element: " << e.what() << "\n";
     return 2;
@@ -188,14 +214,13 @@ int element_command(const swmpm::scene::Scene& scene, const ElementArgs& a, bool
     std::cerr << "swmpm element: " << e.what() << "\n";
     return 1;
   }
-  swmpm::post::CsvResult csv;
+  swmpm::post::CsvResult csv = element_table(runs);
   std::ostringstream note;
-  note << "swmpm element: " << a.test << ", material " << r.material << " (" << r.model << "), p0 = " << a.p0
-       << " Pa, " << a.steps << " steps; compression positive, axial = z";
+  note << "swmpm element: " << a.test << ", material " << runs.front().material << " (" << runs.front().model
+       << "), p0 =";
+  for (std::size_t k = 0; k < a.p0.size(); ++k) note << (k ? ", " : " ") << a.p0[k];
+  note << " Pa, " << a.steps << " steps; compression positive, axial = z";
   csv.comments.push_back(note.str());
-  csv.names = {"axial_strain", "p", "q", "volumetric_strain"};
-  for (std::size_t i = 0; i < r.size(); ++i)
-    csv.rows.push_back({r.axial_strain[i], r.p[i], r.q[i], r.volumetric_strain[i]});
   try {
     if (a.out.empty()) {
       swmpm::post::write_csv(csv, std::cout);
@@ -257,13 +282,17 @@ int main(int argc, char** argv) {
   element->add_option("--test", el.test, "drained-triaxial, undrained-triaxial or oedometer (axial = z)")
       ->required()
       ->check(CLI::IsMember({"drained-triaxial", "undrained-triaxial", "oedometer"}));
-  element->add_option("--p0", el.p0, "Initial isotropic effective stress [Pa], compression positive")
+  element->add_option("--p0", el.p0,
+                      "Initial isotropic effective stress [Pa], compression positive; several (1e5,2e5): one run each")
       ->required()
+      ->delimiter(',')
       ->check(CLI::PositiveNumber);
   element->add_option("--axial-strain", el.axial_strain, "Final axial strain [-], compression positive")->required();
   element->add_option("--steps", el.steps, "Equal strain increments (default 100)")->check(CLI::Range(1, 100000000));
   element->add_option("--out", el.out, "CSV file (default: standard output)");
-  element->add_option("--plot", el.plot, "PNG: q-p', q-axial strain, volumetric-axial strain");
+  element->add_option("--plot", el.plot,
+                      "PNG: q-p', q-axial strain, volumetric strain (undrained: excess pore pressure) and, "
+                      "where the model has it, the state parameter against axial strain; one curve per p0");
   for (auto* sub : {pre, solve, post, run, element}) sub->add_flag("-q,--quiet", quiet, "No terminal output");
 
   CLI11_PARSE(app, argc, argv);

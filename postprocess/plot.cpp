@@ -271,37 +271,66 @@ std::vector<std::string> plot_fields(const std::string& run_dir, const std::stri
 }
 
 void plot_element_curves(const CsvResult& table, const std::string& title, const std::string& png) {
-  const auto column = [&](const std::string& name) {
+  const auto index = [&](const std::string& name) {
     const auto it = std::find(table.names.begin(), table.names.end(), name);
-    if (it == table.names.end()) throw std::runtime_error("plot_element_curves: no column " + name);
-    std::vector<double> out;
-    const auto c = static_cast<std::size_t>(it - table.names.begin());
-    for (const auto& row : table.rows) out.push_back(row[c]);
-    return out;
+    return it == table.names.end() ? -1 : static_cast<int>(it - table.names.begin());
   };
-  // Percent and kPa on the axes.
-  auto scaled = [](std::vector<double> v, double f) {
-    for (double& x : v) x *= f;
-    return v;
+  for (const char* name : {"axial_strain", "p", "q", "volumetric_strain"})
+    if (index(name) < 0) throw std::runtime_error(std::string("plot_element_curves: no column ") + name);
+  // Panels: (x column, y column, x scale, y scale, x label, y label); percent and kPa on the axes.
+  struct Panel {
+    int x, y;
+    double fx, fy;
+    std::string xlabel, ylabel;
   };
-  const auto ea = scaled(column("axial_strain"), 100.0), p = scaled(column("p"), 1e-3),
-             q = scaled(column("q"), 1e-3), ev = scaled(column("volumetric_strain"), 100.0);
+  const int ea = index("axial_strain"), u = index("excess_pore_pressure"), psi = index("state_parameter");
+  std::vector<Panel> panels{{index("p"), index("q"), 1e-3, 1e-3, "p' [kPa]", "q [kPa]"},
+                            {ea, index("q"), 100.0, 1e-3, "axial strain [%]", "q [kPa]"}};
+  if (u >= 0)
+    panels.push_back({ea, u, 100.0, 1e-3, "axial strain [%]", "excess pore pressure [kPa]"});
+  else
+    panels.push_back({ea, index("volumetric_strain"), 100.0, 100.0, "axial strain [%]",
+                      "volumetric strain [%] (compression +)"});
+  if (psi >= 0) panels.push_back({ea, psi, 100.0, 1.0, "axial strain [%]", "state parameter psi = v - v_c(p') [-]"});
+
+  // One data block per run (gnuplot `index`), split where the p0 column changes.
+  const int p0 = index("p0");
   const TempDir tmp;
   const fs::path data = tmp / "element.dat";
-  write_columns(data, {&ea, &p, &q, &ev});
+  std::vector<double> block_p0;
+  {
+    std::ofstream out(data);
+    out.precision(10);
+    for (std::size_t i = 0; i < table.rows.size(); ++i) {
+      const auto& row = table.rows[i];
+      if (p0 >= 0 && (block_p0.empty() || row[static_cast<std::size_t>(p0)] != block_p0.back())) {
+        if (!block_p0.empty()) out << "\n\n";
+        block_p0.push_back(row[static_cast<std::size_t>(p0)]);
+      }
+      for (std::size_t c = 0; c < row.size(); ++c) out << (c ? " " : "") << row[c];
+      out << "\n";
+    }
+    if (!out) throw std::runtime_error(data.string() + ": cannot write a temporary plot file");
+  }
+  if (block_p0.empty()) block_p0.push_back(std::nan(""));
   const std::string d = quoted(data.string());
   std::ostringstream gp;
-  gp << "set terminal pngcairo size 1500,480 font 'sans,10'\n"
+  const bool grid2 = panels.size() == 4;
+  gp << "set terminal pngcairo size " << (grid2 ? "1200,900" : "1500,480") << " font 'sans,10'\n"
      << "set output " << quoted(png) << "\n"
-     << "set grid\nunset key\n"
-     << "set multiplot layout 1,3 title " << quoted(title) << "\n"
-     << "set xlabel \"p' [kPa]\"\nset ylabel 'q [kPa]'\n"
-     << "plot " << d << " using 2:3 with lines lw 2\n"
-     << "set xlabel 'axial strain [%]'\nset ylabel 'q [kPa]'\n"
-     << "plot " << d << " using 1:3 with lines lw 2\n"
-     << "set xlabel 'axial strain [%]'\nset ylabel 'volumetric strain [%] (compression +)'\n"
-     << "plot " << d << " using 1:4 with lines lw 2\n"
-     << "unset multiplot\n";
+     << "set grid\n" << (block_p0.size() > 1 ? "set key top right\n" : "unset key\n")
+     << "set multiplot layout " << (grid2 ? "2,2" : "1,3") << " title " << quoted(title) << "\n";
+  for (const Panel& pl : panels) {
+    gp << "set xlabel " << quoted(pl.xlabel) << "\nset ylabel " << quoted(pl.ylabel) << "\nplot ";
+    for (std::size_t b = 0; b < block_p0.size(); ++b) {
+      std::ostringstream label;
+      if (!std::isnan(block_p0[b])) label << "p0 = " << block_p0[b] * 1e-3 << " kPa";
+      gp << (b ? ", " : "") << d << " index " << b << " using ($" << pl.x + 1 << "*" << pl.fx << "):($" << pl.y + 1
+         << "*" << pl.fy << ") with lines lw 2 title " << quoted(label.str());
+    }
+    gp << "\n";
+  }
+  gp << "unset multiplot\n";
   run_gnuplot(gp.str(), png, tmp);
 }
 

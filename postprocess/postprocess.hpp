@@ -184,7 +184,9 @@ std::string describe(const Comparison& c);
 // plots (plot.cpp): gnuplot, pngcairo
 
 /// The single-element curves of `swmpm element` (a table with columns axial_strain, p, q,
-/// volumetric_strain; Pa, compression positive) in one PNG: q–p′, q–ε_a and ε_v–ε_a.
+/// volumetric_strain; Pa, compression positive) in one PNG: q–p′, q–ε_a and ε_v–ε_a, the last
+/// replaced by u–ε_a when the table has excess_pore_pressure, plus ψ–ε_a when it has
+/// state_parameter. With a p0 column, one curve per p0 (rows of one run consecutive).
 void plot_element_curves(const CsvResult& table, const std::string& title, const std::string& png);
 
 /// Draws every monitor of RUN_DIR/monitors.csv into RUN_DIR/plots/<monitor>.png (one panel per

@@ -305,11 +305,12 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
     if (solver.contains("stabilisation"))
       throw std::runtime_error(scene_path + ": /solver/stabilisation: the dry formulation has no pore pressure to stabilise "
                                "and F-bar is not implemented yet in this version; remove the key");
-    bool plastic = false;  // mohr-coulomb reads solver.kinematics (finite- or small-strain)
-    for (const auto& m : s.materials) plastic = plastic || m.model == scene::MaterialModel::mohr_coulomb;
+    bool plastic = false;  // mohr-coulomb and nor-sand read solver.kinematics (nor-sand: finite-strain only)
+    for (const auto& m : s.materials)
+      plastic = plastic || m.model == scene::MaterialModel::mohr_coulomb || m.model == scene::MaterialModel::nor_sand;
     if (solver.contains("kinematics") && !plastic)
       throw std::runtime_error(scene_path + ": /solver/kinematics: the dry formulation's kinematics follow the material "
-                               "(linear-elastic: Jaumann rate, hencky: finite strain; only mohr-coulomb reads the "
+                               "(linear-elastic: Jaumann rate, hencky: finite strain; only mohr-coulomb and nor-sand read the "
                                "switch); remove the key");
   }
 }

@@ -691,29 +691,41 @@ const Table& nor_sand_table() {
       "Nor-Sand (`nor-sand`)", "`materials[]`",
       {
           {.name = "shear_modulus", .required = true, .range = positive, .unit = "Pa",
-           .meaning = "Elastic shear modulus G."},
+           .meaning = "Elastic shear modulus μ0 (G; the shear modulus at zero `shear_modulus_coupling`)."},
+          {.name = "shear_modulus_coupling", .def = 0.0, .range = non_negative, .unit = "-",
+           .meaning = "α0 of Borja & Andrade's hyperelasticity: μ_e = μ0 + α0 p̂ (0: constant shear modulus)."},
           {.name = "swelling_index", .required = true, .range = positive, .unit = "-",
-           .meaning = "Slope κ of the elastic unloading line in v–ln p′."},
+           .meaning = "Elastic compressibility κ̃ = −dε_v^e / d ln p′ (logarithmic strain; ≈ κ / v)."},
+          {.name = "reference_pressure", .def = 2.0e3, .range = positive, .unit = "Pa",
+           .meaning = "Pressure p_ref of the hyperelastic law at `reference_elastic_volumetric_strain`."},
+          {.name = "reference_elastic_volumetric_strain", .def = 0.0, .range = any_number, .unit = "-",
+           .meaning = "Elastic volumetric strain ε_v0^e at `reference_pressure` (tension positive)."},
           {.name = "compression_index", .required = true, .range = positive, .unit = "-",
-           .meaning = "Slope λ of the critical state line in v–ln p′."},
+           .meaning = "Slope λ̃ of the critical state line in v–ln p′."},
           {.name = "reference_specific_volume", .required = true, .range = positive, .unit = "-",
-           .meaning = "Specific volume Γ of the critical state line at the reference pressure."},
+           .meaning = "Specific volume v_c0 of the critical state line at `csl_reference_pressure`."},
+          {.name = "csl_reference_pressure", .def = 1.0e3, .range = positive, .unit = "Pa",
+           .meaning = "Pressure unit of the critical state line: v_c = v_c0 − λ̃ ln(p′ / p_csl)."},
           {.name = "critical_state_ratio", .required = true, .range = positive, .unit = "-",
            .meaning = "Critical state stress ratio M (triaxial compression)."},
-          {.name = "yield_coefficient", .required = true, .range = positive, .unit = "-",
-           .meaning = "Shape coefficient N of the yield surface."},
-          {.name = "potential_coefficient", .required = true, .range = positive, .unit = "-",
-           .meaning = "Shape coefficient of the plastic potential."},
+          {.name = "yield_coefficient", .required = true, .range = half_open(0, 1), .unit = "-",
+           .meaning = "Shape coefficient N of the yield surface (0: the logarithmic form)."},
+          {.name = "potential_coefficient", .required = true, .range = half_open(0, 1), .unit = "-",
+           .meaning = "Shape coefficient N̄ of the plastic potential (N̄ = N: associated)."},
           {.name = "hardening_modulus", .required = true, .range = positive, .unit = "-",
-           .meaning = "Plastic hardening modulus H."},
+           .meaning = "Hardening coefficient h of the image pressure: π̇_i = h (π_i* − π_i) ε̇_s^p."},
           {.name = "dilatancy_multiplier", .required = true, .range = any_number, .unit = "-",
-           .meaning = "State–dilatancy coefficient χ (may be negative)."},
+           .meaning = "α of the maximum plastic dilatancy α ψ_i (negative, e.g. −3.5)."},
           {.name = "initial_specific_volume", .required = true, .range = positive, .unit = "-",
-           .meaning = "Specific volume v = 1 + e at the start."},
+           .meaning = "Specific volume v0 = 1 + e0 at F = I; v = J v0."},
+          {.name = "overconsolidation_ratio", .def = 1.0, .range = at_least(1), .unit = "-",
+           .meaning = "OCR: the initial image pressure is OCR × the one that puts the first stress on the yield surface."},
           {.name = "dilatancy_cutoff_start", .def = 1.0, .range = positive, .unit = "-",
-           .meaning = "Where the dilatancy cut-off starts acting."},
+           .meaning = "Accumulated deviatoric plastic strain Ē_d^p where ψ_i starts fading to 0 (1 = 100 %)."},
           {.name = "dilatancy_cutoff_end", .def = 1.5, .range = positive, .unit = "-",
-           .meaning = "Where the dilatancy cut-off is complete."},
+           .meaning = "Ē_d^p where ψ_i reaches 0 (≥ `dilatancy_cutoff_start`)."},
+          {.name = "gas_specific_volume_ratio", .def = 1.6, .range = positive, .unit = "-",
+           .meaning = "v_crit / v0: above v_crit the stress is zero (gas-like, reversible)."},
       }};
   return t;
 }
@@ -1428,6 +1440,12 @@ class SceneParser {
     if (o.has("hydraulic_conductivity") && o.has("intrinsic_permeability")) {
       c_.error(o.at("intrinsic_permeability"),
                "got both \"hydraulic_conductivity\" and \"intrinsic_permeability\", expected at most one");
+    }
+    if (m.has("dilatancy_cutoff_start") && m.has("dilatancy_cutoff_end") &&
+        m.at("dilatancy_cutoff_end") < m.at("dilatancy_cutoff_start")) {
+      c_.error(o.at("dilatancy_cutoff_end"), "got " + fmt_g(m.at("dilatancy_cutoff_end")) +
+                                                 ", expected a number >= dilatancy_cutoff_start = " +
+                                                 fmt_g(m.at("dilatancy_cutoff_start")) + " [-]");
     }
     if (m.has("friction_angle") && m.has("dilation_angle") && m.at("dilation_angle") > m.at("friction_angle")) {
       c_.error(o.at("dilation_angle"), "got " + fmt_g(m.at("dilation_angle")) +

@@ -19,25 +19,29 @@ struct Saved {
   Sym sigma;
   Mat3 F;
   double eps_p;
+  MaterialState state;  // the model's internal variables (Nor-Sand: π_i, Ē_d^p, ψ_start)
 };
 
 class Point {
  public:
   Point(const MaterialModel<3>& model, double p0) : model_(model) {
     ps_.resize(1);
+    ps_.add_material_state();  // zero: "not initialised", as for a freshly loaded particle
     ps_.V0[0] = ps_.V[0] = 1.0;
     ps_.m[0] = 1.0;
     ps_.sigma[0] << -p0, -p0, -p0, 0.0, 0.0, 0.0;
   }
-  Saved save() const { return {ps_.sigma[0], ps_.F[0], ps_.eps_p[0]}; }
+  Saved save() const { return {ps_.sigma[0], ps_.F[0], ps_.eps_p[0], ps_.state[0]}; }
   const Sym& sigma() const { return ps_.sigma[0]; }
   const Mat3& F() const { return ps_.F[0]; }
+  const ParticleSet<3>& particles() const { return ps_; }
 
   /// From `s`, one update to the diagonal F_{n+1} = diag(f): L dt = 2 (ΔF − I)(ΔF + I)⁻¹, dt = 1,
   /// the inverse of the solver's ΔF = (I − L dt/2)⁻¹ (I + L dt/2).
   void step(const Saved& s, const std::array<double, 3>& f) {
     ps_.sigma[0] = s.sigma;
     ps_.eps_p[0] = s.eps_p;
+    ps_.state[0] = s.state;
     Mat3 F = Mat3::Zero(), L = Mat3::Zero();
     for (int i = 0; i < 3; ++i) {
       F(i, i) = f[static_cast<std::size_t>(i)];
@@ -100,6 +104,9 @@ ElementResult run_element(const scene::Scene& scene, const std::string& material
   r.model = model->name();
   r.test = test;
   r.p0 = p0;
+  r.state_names = model->report_names();
+  r.state_columns.resize(r.state_names.size());
+  std::vector<double> values(r.state_names.size());
   const auto record = [&] {
     const Sym& s = pt.sigma();
     const Mat3& F = pt.F();
@@ -111,6 +118,8 @@ ElementResult run_element(const scene::Scene& scene, const std::string& material
     r.axial_stress.push_back(sa);
     r.radial_stress.push_back(sr);
     r.radial_strain.push_back(1.0 - F(0, 0));
+    model->report_values(pt.particles(), 0, values);
+    for (std::size_t c = 0; c < values.size(); ++c) r.state_columns[c].push_back(values[c]);
   };
   record();
 

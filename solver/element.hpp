@@ -38,6 +38,10 @@ struct ElementResult {
   std::vector<double> axial_stress;       // −σ_zz
   std::vector<double> radial_stress;      // −(σ_xx + σ_yy) / 2
   std::vector<double> radial_strain;      // 1 − F_xx [-]
+  // Quantities the model reports besides the stress (MaterialModel::report_names: Nor-Sand's
+  // specific_volume and state_parameter), one column per name.
+  std::vector<std::string> state_names;
+  std::vector<std::vector<double>> state_columns;
   std::size_t size() const { return axial_strain.size(); }
 };
 

@@ -19,6 +19,7 @@
 #include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 #include "solver/formulation.hpp"
+#include "solver/materials/material.hpp"
 #include "solver/output/monitors.hpp"
 #include "solver/output/particle_io.hpp"
 #include "swmpm/version.hpp"
@@ -73,6 +74,7 @@ class Runner {
     scene_ = scene::load_scene((dir_ / "scene.json").string());
     const fs::path particles = dir_ / "particles" / "solid.vtu";
     state_.solid = particles_from_cloud<Dim>(scene::read_vtu(particles.string()), particles.string());
+    if (needs_material_state(scene_)) state_.solid.add_material_state();
     state_.index_ids();
     const fs::path water = dir_ / "particles" / "fluid.vtu";
     if (scene_.formulation == scene::Formulation::semi_implicit_double_point ||
@@ -284,7 +286,8 @@ class Runner {
     rj["us_per_particle_step"] = us_pps;
     rj["loop_us_per_particle_step"] = loop_us_pps;
     rj["peak_memory_bytes"] = peak_memory_bytes();
-    rj["particle_bytes"] = (state_.solid.size() + state_.fluid.size()) * ParticleSet<Dim>::bytes_per_particle();
+    rj["particle_bytes"] = state_.solid.size() * state_.solid.bytes_per_particle() +
+                           state_.fluid.size() * state_.fluid.bytes_per_particle();
     rj["frames"] = frame_count_;
     if (status == "diverged") rj["last_good_frame_time"] = last_good_frame_time_;
     nlohmann::ordered_json stages;

@@ -97,7 +97,7 @@ class Dry final : public Formulation<Dim> {
       if (material_particles_[k].empty()) continue;
       double rho_min = std::numeric_limits<double>::max();
       for (int p : material_particles_[k]) rho_min = std::min(rho_min, ps.m[p] / ps.V[p]);
-      c_max = std::max(c_max, std::sqrt(materials_[k]->p_wave_modulus() / rho_min));
+      c_max = std::max(c_max, std::sqrt(materials_[k]->max_p_wave_modulus(ps, material_particles_[k]) / rho_min));
     }
     double v_max = 0.0;
     const long n = static_cast<long>(ps.size());

@@ -162,9 +162,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     double c_max = 0.0;
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       if (material_particles_[k].empty() || !materials_[k]) continue;
+      const double M_s = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
       for (int p : material_particles_[k]) {
         const double rho_sat = (ps.m[p] + ps.m_f[p]) / ps.V[p];
-        const double M = materials_[k]->p_wave_modulus() + (ps.fluid_material[p] >= 0 ? pore_[k].K_f / ps.n[p] : 0.0);
+        const double M = M_s + (ps.fluid_material[p] >= 0 ? pore_[k].K_f / ps.n[p] : 0.0);
         c_max = std::max(c_max, std::sqrt(M / rho_sat));
       }
     }

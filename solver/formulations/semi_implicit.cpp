@@ -252,7 +252,7 @@ class SemiImplicit final : public Formulation<Dim> {
     double c_max = 0.0;
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       if (material_particles_[k].empty() || !materials_[k]) continue;
-      const double M = materials_[k]->p_wave_modulus();
+      const double M = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
       for (int p : material_particles_[k]) {
         const double rho_sat = (ps.m[p] + ps.n[p] * perm_[k].rho_w * ps.V[p]) / ps.V[p];
         c_max = std::max(c_max, std::sqrt(M / rho_sat));

@@ -8,6 +8,7 @@
 
 #include "solver/materials/material.hpp"
 #include "solver/materials/mohr_coulomb.hpp"
+#include "solver/materials/nor_sand.hpp"
 
 namespace swmpm {
 namespace {
@@ -108,10 +109,19 @@ std::unique_ptr<MaterialModel<Dim>> make_material(const scene::Material& m, cons
       return std::make_unique<Hencky<Dim>>(Elastic::from(m.at("youngs_modulus"), m.at("poisson_ratio")));
     case MaterialModel::mohr_coulomb:
       return make_mohr_coulomb<Dim>(m, s);  // materials/mohr_coulomb.cpp
+    case MaterialModel::nor_sand:
+      return make_nor_sand<Dim>(m, s);  // materials/nor_sand.cpp
     default:
       throw std::runtime_error("material \"" + m.name + "\": model \"" + scene::to_string(m.model) +
-                               "\" is not implemented yet in this version (available: linear-elastic, hencky, mohr-coulomb)");
+                               "\" is not implemented yet in this version (available: linear-elastic, hencky, "
+                               "mohr-coulomb, nor-sand)");
   }
+}
+
+bool needs_material_state(const scene::Scene& s) {
+  for (const auto& m : s.materials)
+    if (m.model == scene::MaterialModel::nor_sand) return true;
+  return false;
 }
 
 template std::unique_ptr<MaterialModel<2>> make_material<2>(const scene::Material&, const scene::Scene&);

@@ -5,7 +5,8 @@
 // Contract of update_stress: on entry ps.F[p] is F_{n+1} (already updated from L = ps.L[p] over dt)
 // and ps.sigma[p] is sigma_n; on exit ps.sigma[p] is sigma_{n+1} (Cauchy, tension positive). A
 // model must not allocate. It returns the smallest particle index whose update failed (J <= 0,
-// non-finite stress), or -1.
+// non-finite stress), or -1. A model with internal variables (needs_material_state) keeps them in
+// ps.state[p] and updates them in the same call.
 #pragma once
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "scene/scene.hpp"
 #include "solver/particles/particles.hpp"
@@ -27,8 +29,21 @@ class MaterialModel {
   virtual long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double dt) const = 0;
   /// Constrained (P-wave) modulus K + 4G/3 [Pa] at the current state, for the CFL condition.
   virtual double p_wave_modulus() const = 0;
+  /// The largest P-wave modulus [Pa] among particles `ids` (pressure-dependent models look at each
+  /// particle's stress; the others return p_wave_modulus()). One call per material per step.
+  virtual double max_p_wave_modulus(const ParticleSet<Dim>& ps, std::span<const int> ids) const {
+    (void)ps, (void)ids;
+    return p_wave_modulus();
+  }
   /// Stored elastic energy of particle p [J, or J/m in plane strain].
   virtual double strain_energy(const ParticleSet<Dim>& ps, int p) const = 0;
+  /// Names of state quantities the model reports beside the stress (Nor-Sand: specific_volume,
+  /// state_parameter); empty for models without. For reports (swmpm element), not the time loop.
+  virtual std::vector<std::string> report_names() const { return {}; }
+  /// Their values at particle p, in the order of report_names() (out.size() == its size).
+  virtual void report_values(const ParticleSet<Dim>& ps, int p, std::span<double> out) const {
+    (void)ps, (void)p, (void)out;
+  }
 };
 
 /// The loop every model's update_stress runs: fn(p) for each particle p of `ids` (in parallel,
@@ -51,6 +66,10 @@ long update_each(ParticleSet<Dim>& ps, std::span<const int> ids, Fn&& fn) {
 /// formulations cannot run yet.
 template <int Dim>
 std::unique_ptr<MaterialModel<Dim>> make_material(const scene::Material& m, const scene::Scene& s);
+
+/// True when a material of the scene keeps internal variables in ParticleSet::state (nor-sand):
+/// the particle set must then carry them (ParticleSet::add_material_state) before the first step.
+bool needs_material_state(const scene::Scene& s);
 
 /// Lamé parameters from Young's modulus and Poisson's ratio.
 struct Elastic {

@@ -17,6 +17,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "solver/materials/spectral.hpp"
 #include "solver/transfer/transfer.hpp"
 
 namespace swmpm {
@@ -24,47 +25,11 @@ namespace {
 
 namespace mc = mohr_coulomb;
 using mc::Principal;
-
-
-/// Spectral decomposition of the symmetric 2x2 [[a, b], [b, d]]: eigenvalues l1 >= l2 and the
-/// double angle of the first eigenvector (cos 2θ, sin 2θ), so that
-/// T = ½(t1 + t2) I + ½(t1 − t2) [[cos 2θ, sin 2θ], [sin 2θ, −cos 2θ]] rebuilds a coaxial tensor.
-struct Eig2 {
-  double l1, l2, c2, s2;
-};
-inline Eig2 eig2(double a, double d, double b) {
-  const double h = 0.5 * (a - d), m = 0.5 * (a + d), r = std::sqrt(h * h + b * b);
-  if (!(r > 0.0)) return {m, m, 1.0, 0.0};
-  return {m + r, m - r, h / r, b / r};
-}
-/// xx, yy, xy of the tensor with principal values t1, t2 on the directions of e.
-struct Sym2 {
-  double xx, yy, xy;
-};
-inline Sym2 rebuild(const Eig2& e, double t1, double t2) {
-  const double m = 0.5 * (t1 + t2), h = 0.5 * (t1 - t2);
-  return {m + h * e.c2, m - h * e.c2, h * e.s2};
-}
-
-/// exp(X) of a symmetric 3x3 (the elastic b_e = exp(2 ε_e) in 3D): e^{tr X / 3} times the Taylor
-/// series of the deviator A in Horner form, A first scaled to a norm <= 1/8 and the result squared
-/// back. The degree d is the smallest with ‖A‖^{d+1}/(d+1)! < 1e-17 (d <= 10; 6-8 for elastic
-/// strains of 0.5-5 %). As fast as an eigendecomposition (computeDirect, ~170 ns here) and free
-/// of its loss of accuracy for close eigenvalues (K0 = 1, the apex).
-inline Mat3 sym_exp(const Mat3& X) {
-  const double m = X.trace() / 3.0;
-  Mat3 A = X - m * Mat3::Identity();
-  double nrm = A.norm();
-  int squarings = 0;
-  for (; nrm > 0.125 && squarings < 60; nrm *= 0.5) ++squarings;
-  A *= std::ldexp(1.0, -squarings);
-  int d = 1;
-  for (double term = nrm * nrm / 2.0; term >= 1e-17 && d < 10; term *= nrm / (d + 1.0)) ++d;
-  Mat3 E = Mat3::Identity() + A / static_cast<double>(d);
-  for (int k = d - 1; k >= 1; --k) E = Mat3::Identity() + (A * E) / static_cast<double>(k);
-  for (int k = 0; k < squarings; ++k) E = E * E;
-  return std::exp(m) * E;
-}
+using spectral::eig2;
+using spectral::Eig2;
+using spectral::rebuild;
+using spectral::Sym2;
+using spectral::sym_exp;
 
 template <int Dim>
 class MohrCoulomb final : public MaterialModel<Dim> {
@@ -105,12 +70,8 @@ class MohrCoulomb final : public MaterialModel<Dim> {
       // ΔF_zz = 1, so the zz elastic strain of the trial is that of step n (no exp/log for it).
       const Eig2 en = eig2(s[0], s[1], s[3]);
       const Principal eps_n = p_.compliance(Jn * Principal(en.l1, en.l2, s[2]));
-      const Sym2 b = rebuild(en, std::exp(2.0 * eps_n[0]), std::exp(2.0 * eps_n[1]));
-      Eigen::Matrix2d B;
-      B << b.xx, b.xy, b.xy, b.yy;
-      const Eigen::Matrix2d Bt = dF * B * dF.transpose();
-      const Eig2 et = eig2(Bt(0, 0), Bt(1, 1), 0.5 * (Bt(0, 1) + Bt(1, 0)));
-      if (!(et.l2 > 0.0)) return false;
+      Eig2 et;
+      if (!spectral::plane_strain_trial(en, eps_n[0], eps_n[1], dF, et)) return false;
       const Principal eps(0.5 * std::log(et.l1), 0.5 * std::log(et.l2), eps_n[2]);
       const mc::Return r = mc::return_map(p_, p_.stiffness(eps));
       const Sym2 t = rebuild(et, r.s[0], r.s[1]);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <new>
@@ -12,6 +13,10 @@
 #include "solver/common.hpp"
 
 namespace swmpm {
+
+/// Internal variables of a constitutive model at one particle; their meaning is the model's (Nor-Sand:
+/// image pressure, accumulated deviatoric plastic strain, ψ_i where the dilatancy cut-off starts).
+using MaterialState = std::array<double, 4>;
 
 template <int Dim>
 struct ParticleSet {
@@ -40,8 +45,18 @@ struct ParticleSet {
   std::vector<Vec<Dim>> v_f;           // m/s, pore fluid velocity
   std::vector<std::int32_t> fluid_material;  // index into scene.materials
 
+  // Internal variables of the constitutive model (stay empty unless a scene material needs them,
+  // needs_material_state in materials/material.hpp; zero-initialised: "not set yet").
+  std::vector<MaterialState> state;
+
   std::size_t size() const { return x.size(); }
   bool two_phase() const { return carries_fluid_; }
+  bool has_material_state() const { return carries_state_; }
+  /// Allocates the model state (zero) for a set of the current size.
+  void add_material_state() {
+    carries_state_ = true;
+    state.assign(size(), MaterialState{});
+  }
   /// Allocates the pore-fluid fields (zero) for a set of the current size.
   void add_fluid() {
     carries_fluid_ = true;
@@ -69,18 +84,22 @@ struct ParticleSet {
     body.resize(k);
     faces.resize(k);
     if (carries_fluid_) add_fluid();
+    if (carries_state_) add_material_state();
   }
   /// Calls f(field) for every per-particle array (the one list of fields; resize-free helpers use it).
   template <class Fn>
   void for_each_field(Fn&& f) {
     f(id), f(x), f(x0), f(v), f(l), f(m), f(V), f(V0), f(F), f(L), f(sigma), f(eps_p), f(material), f(body),
-        f(faces), f(n), f(p), f(m_f), f(v_f), f(fluid_material);
+        f(faces), f(n), f(p), f(m_f), f(v_f), f(fluid_material), f(state);
   }
-  /// Bytes held per particle by this set (for run.json and the memory benchmark).
-  static constexpr std::size_t bytes_per_particle() {
+  /// Bytes held per particle by this set (for run.json and the memory benchmark): the fields every
+  /// set has, plus the pore-fluid and model-state fields when allocated.
+  std::size_t bytes_per_particle() const {
     return sizeof(std::int64_t) + 4 * sizeof(Vec<Dim>) + 3 * sizeof(double) + sizeof(Mat3) +
            sizeof(MatD<Dim>) + sizeof(Sym) + sizeof(double) + 2 * sizeof(std::int32_t) +
-           sizeof(std::uint32_t);
+           sizeof(std::uint32_t) +
+           (carries_fluid_ ? 3 * sizeof(double) + sizeof(Vec<Dim>) + sizeof(std::int32_t) : 0) +
+           (carries_state_ ? sizeof(MaterialState) : 0);
   }
   /// Copies the state of `o` (every field but L, which each step recomputes) reusing this set's
   /// capacity: the snapshot of the last good state costs no allocation after the first.
@@ -88,12 +107,15 @@ struct ParticleSet {
     id = o.id, x = o.x, x0 = o.x0, v = o.v, l = o.l, m = o.m, V = o.V, V0 = o.V0, F = o.F, sigma = o.sigma;
     eps_p = o.eps_p, material = o.material, body = o.body, faces = o.faces;
     n = o.n, p = o.p, m_f = o.m_f, v_f = o.v_f, fluid_material = o.fluid_material;
+    state = o.state;
     carries_fluid_ = o.carries_fluid_;
+    carries_state_ = o.carries_state_;
     L.clear();
   }
 
  private:
   bool carries_fluid_ = false;
+  bool carries_state_ = false;
 };
 
 /// Reorders a particle set in place: particle k of the result is particle order[k] before.
