@@ -650,8 +650,10 @@ const Table& solid_table() {
           {.name = "intrinsic_permeability", .range = positive, .unit = "m^2",
            .meaning = "Intrinsic permeability κ = k μ / (ρ_w g) (or `hydraulic_conductivity`)."},
           {.name = "permeability_law", .type = Type::choice, .def = "constant",
-           .values = {"constant", "kozeny-carman"},
-           .meaning = "Permeability constant, or varying with porosity (Kozeny–Carman)."},
+           .values = {"constant", "kozeny-carman", "xie-leo"},
+           .meaning = "Permeability constant, varying with porosity (Kozeny–Carman: k = C1 n³/(1 − n)², C1 from the "
+                      "initial n0 and k0), or with the volume ratio (`xie-leo`: k = k0 J², J = (1 − n0)/(1 − n), the law "
+                      "behind Xie & Leo's large-strain consolidation closed form)."},
       }};
   return t;
 }

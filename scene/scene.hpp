@@ -58,7 +58,7 @@ struct Material {
   /// grain_density, porosity, cohesion, friction_angle, ...), validated against the model's
   /// parameter table and with defaults filled in. Units as in docs/scene-format.md.
   std::map<std::string, double> params;
-  std::string permeability_law = "constant";  // "constant" | "kozeny-carman"
+  std::string permeability_law = "constant";  // "constant" | "kozeny-carman" | "xie-leo"
 
   bool has(const std::string& key) const { return params.count(key) != 0; }
   double at(const std::string& key) const;  // throws std::out_of_range naming the key

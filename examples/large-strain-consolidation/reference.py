@@ -4,10 +4,12 @@
 Continuum model (1D strain, no gravity, incompressible grains), Lagrangian coordinate a in [0, H]
 (a = 0 the impermeable base, a = H the drained top), J = current / initial volume:
 
-    constitutive     sigma'_yy = E ln J          (Cauchy effective stress, tension positive:
-                                                  Xie & Leo's  de/(1+e) = -m_v d sigma', m_v = 1/E,
-                                                  and what linear-elastic (Jaumann) gives in 1D)
-    equilibrium      sigma'_yy - p = -q          =>  J = exp((p - q) / E)
+    constitutive     sigma'_yy = E ln J          (--law cauchy, the default: Cauchy effective stress,
+                                                  tension positive: Xie & Leo's de/(1+e) = -m_v d sigma',
+                                                  m_v = 1/E, and what linear-elastic (Jaumann) gives in 1D)
+                     tau'_yy = J sigma'_yy = E ln J   (--law kirchhoff: what hencky gives in 1D)
+    equilibrium      sigma'_yy - p = -q          =>  J = exp((p - q) / E)   (cauchy)
+                                                     E ln J / J = p - q     (kirchhoff, solved by Newton)
     fluid mass       J (m_v + n / K_f) dp/dt = d/da [ k / (gamma_w J) dp/da ],   n = 1 - (1 - n0) / J
     Darcy            k = k0 (constant)  or  k = k0 J^2 (Xie & Leo's assumption)
 
@@ -43,8 +45,23 @@ def tridiag(a, b, c, d):
     return x
 
 
+def volume_ratio(s, E, law):
+    """J for the effective stress s = p - q (<= 0) and its derivative dJ/ds."""
+    if law == "cauchy":
+        J = math.exp(s / E)
+        return J, J / E
+    J = math.exp(s / E)  # Newton on g(J) = E ln J - s J = 0 from the Cauchy value
+    for _ in range(50):
+        g, dg = E * math.log(J) - s * J, E / J - s
+        step = g / dg
+        J -= step
+        if abs(step) < 1e-15:
+            break
+    return J, J * J / (E * (1.0 - math.log(J)))  # d(E ln J / J)/dJ = E (1 - ln J) / J^2
+
+
 def solve(H=1.0, E=1e6, q=2e5, n0=0.3, k0=1e-4, Kf=2.2e9, k_law="constant", t_end=300.0, N=200,
-          dt0=1e-5, growth=1.005, dt_max=0.05, times=None):
+          dt0=1e-5, growth=1.005, dt_max=0.05, times=None, law="cauchy"):
     """Returns [(t, settlement S(t), p profile [p at cell centres])] at the requested times."""
     da = H / N
     p = [q] * N
@@ -55,15 +72,16 @@ def solve(H=1.0, E=1e6, q=2e5, n0=0.3, k0=1e-4, Kf=2.2e9, k_law="constant", t_en
     ti = 0
 
     def coeffs(pv):
-        J = [math.exp((x - q) / E) for x in pv]
+        JdJ = [volume_ratio(x - q, E, law) for x in pv]
+        J = [j for j, _ in JdJ]
         n = [1.0 - (1.0 - n0) / j for j in J]
-        cap = [j * (1.0 / E + (ni / Kf if Kf != float("inf") else 0.0)) for j, ni in zip(J, n)]
+        cap = [dj + (j * ni / Kf if Kf != float("inf") else 0.0) for (j, dj), ni in zip(JdJ, n)]
         kk = [k0 * (j * j if k_law == "xie-leo" else 1.0) for j in J]
         cond = [ki / (GAMMA_W * j) for ki, j in zip(kk, J)]  # k / (gamma_w J)
         return cap, cond
 
     def settlement(pv):
-        return sum(1.0 - math.exp((x - q) / E) for x in pv) * da
+        return sum(1.0 - volume_ratio(x - q, E, law)[0] for x in pv) * da
 
     while ti < len(times):
         step = min(dt, times[ti] - t)
@@ -128,6 +146,9 @@ def main():
     ap.add_argument("--k", type=float, default=1e-4)
     ap.add_argument("--end", type=float, default=300.0)
     ap.add_argument("--N", type=int, default=200)
+    ap.add_argument("--law", choices=["cauchy", "kirchhoff"], default="cauchy",
+                    help="sigma' = E ln J (cauchy: linear-elastic) or tau' = E ln J (kirchhoff: hencky)")
+    ap.add_argument("--title", default="A2 1D large-strain consolidation", help="first comment line's case name")
     ap.add_argument("--closed-form", action="store_true", help="the Xie-Leo series instead (k = k0 J^2, K_f = inf)")
     ap.add_argument("--height", type=float, default=1.0,
                     help="initial height above the base of the point whose settlement is tabulated (1: the top surface)")
@@ -155,16 +176,17 @@ def main():
             what += " (scaled by height/H: exact only at the end, when the strain is uniform)"
     else:
         what = (f"finite volumes ({a.N} cells, backward Euler), k = {'k0' if a.k_law == 'constant' else 'k0 J^2'}, "
-                f"K_f = {a.Kf:g} Pa, sigma' = E ln J (Cauchy); settlement of the point at initial height {a.height:g} m")
-        res = solve(E=a.E, q=a.q, k0=a.k, Kf=a.Kf, k_law=a.k_law, times=times, N=a.N)
+                f"K_f = {a.Kf:g} Pa, {'sigma' if a.law == 'cauchy' else 'tau'}' = E ln J "
+                f"({a.law.capitalize()}); settlement of the point at initial height {a.height:g} m")
+        res = solve(E=a.E, q=a.q, k0=a.k, Kf=a.Kf, k_law=a.k_law, times=times, N=a.N, law=a.law)
         rows = [(0.0, 0.0)]
         da = H / a.N
         for t, S, p in res:
             m = min(a.N, int(a.height / da + 1e-9))
-            strain = [1.0 - math.exp((x - a.q) / a.E) for x in p]
+            strain = [1.0 - volume_ratio(x - a.q, a.E, a.law)[0] for x in p]
             S = sum(strain[:m]) * da + (strain[m] * (a.height - m * da) if m < a.N else 0.0)
             rows.append((t, S))
-    text = (f"# A2 1D large-strain consolidation, E = {a.E:g} Pa, nu = 0, q = p0 = {a.q:g} Pa, k0 = {a.k:g} m/s, H = 1 m\n"
+    text = (f"# {a.title}, E = {a.E:g} Pa, nu = 0, q = p0 = {a.q:g} Pa, k0 = {a.k:g} m/s, H = 1 m\n"
             f"# {what}\n# generated by examples/large-strain-consolidation/reference.py\n"
             f"time,{a.column}\n" + "".join(f"{t:.6g},{0.0 - S:.8g}\n" for t, S in rows))
     if a.out:

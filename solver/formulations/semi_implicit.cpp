@@ -44,14 +44,23 @@ constexpr double g_earth = 9.81;  // m/s^2, in k = rho_w g kappa / mu and in the
 
 /// Water and permeability of one solid material.
 struct Permeability {
+  enum class Law { constant, kozeny_carman, xie_leo };
   double rho_w = 0.0;  // kg/m^3, density of the pore water
   double k0 = 0.0;     // m/s, hydraulic conductivity at the initial porosity
-  bool kozeny_carman = false;
-  /// k(n) = k0 [n^3 / (1 - n)^2] / [n0^3 / (1 - n0)^2] (step 8g, C1 fixed by (n0, k0)).
+  Law law = Law::constant;
+  /// k at porosity n of a point whose initial porosity was n0:
+  ///   kozeny-carman  k = k0 [n^3 / (1 - n)^2] / [n0^3 / (1 - n0)^2]   (step 8g, C1 fixed by (n0, k0))
+  ///   xie-leo        k = k0 J^2,  J = (1 - n0) / (1 - n)               (incompressible grains)
   double at(double n, double n0) const {
-    if (!kozeny_carman) return k0;
-    const double r = (n * n * n / ((1 - n) * (1 - n))) / (n0 * n0 * n0 / ((1 - n0) * (1 - n0)));
-    return k0 * r;
+    switch (law) {
+      case Law::constant: return k0;
+      case Law::kozeny_carman: return k0 * (n * n * n / ((1 - n) * (1 - n))) / (n0 * n0 * n0 / ((1 - n0) * (1 - n0)));
+      case Law::xie_leo: {
+        const double J = (1 - n0) / (1 - n);
+        return k0 * J * J;
+      }
+    }
+    return k0;
   }
 };
 
@@ -118,7 +127,9 @@ class SemiImplicit final : public Formulation<Dim> {
       const auto& m = s.materials[k];
       if (m.model == scene::MaterialModel::fluid) continue;
       perm_[k].k0 = m.has("hydraulic_conductivity") ? m.at("hydraulic_conductivity") : 0.0;
-      perm_[k].kozeny_carman = m.permeability_law == "kozeny-carman";
+      perm_[k].law = m.permeability_law == "kozeny-carman" ? Permeability::Law::kozeny_carman
+                     : m.permeability_law == "xie-leo"     ? Permeability::Law::xie_leo
+                                                           : Permeability::Law::constant;
     }
     const ParticleSet<Dim>& ps = state.solid;
     fluid_of_material_.assign(s.materials.size(), -1);
