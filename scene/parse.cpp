@@ -603,6 +603,10 @@ const Table& scene_table() {
            .meaning = "Frames and monitors, see [output](#output).", .default_text = "all defaults"},
           {.name = "solver", .type = Type::object,
            .meaning = "Scheme switches, see [solver](#solver).", .default_text = "all defaults"},
+          {.name = "initialisation", .type = Type::object,
+           .meaning = "A phase before t = 0 that brings the bodies to equilibrium under gravity, see "
+                      "[initialisation](#initialisation).",
+           .default_text = "none"},
       }};
   return t;
 }
@@ -1033,6 +1037,34 @@ const Table& solver_table() {
   return t;
 }
 
+const Table& initialisation_table() {
+  static const Table t{
+      "Initialisation", "`initialisation`",
+      {
+          {.name = "duration", .required = true, .range = positive, .unit = "s",
+           .meaning = "Length of the phase; it runs from t = −duration to 0, the analysis from 0 to `time.end`."},
+          {.name = "gravity_ramp", .range = non_negative, .unit = "s",
+           .meaning = "Gravity grows linearly from zero over this time from the start of the phase (≤ `duration`); "
+                      "the top-level `gravity_ramp` must then be 0.",
+           .default_text = "`duration`"},
+          {.name = "plasticity", .type = Type::boolean, .def = false,
+           .meaning = "Plastic flow during the phase (false: every material responds elastically; Nor-Sand's image "
+                      "pressure is set from the stress at t = 0)."},
+          {.name = "hydraulic_conductivity", .range = positive, .unit = "m/s",
+           .meaning = "Hydraulic conductivity of every porous material during the phase (e.g. 1 m/s: the pore "
+                      "pressures dissipate as gravity grows).",
+           .default_text = "the materials' own"},
+          {.name = "tie_water", .type = Type::boolean, .def = true,
+           .meaning = "Double-point formulations: each water point follows its coincident soil point during the "
+                      "phase (no seepage of the points; the grid still solves the flow)."},
+          {.name = "damping", .range = half_open(0, 1), .unit = "-",
+           .meaning = "Local damping during the phase.", .default_text = "`solver.damping`"},
+          {.name = "reset_displacement", .type = Type::boolean, .def = true,
+           .meaning = "Displacements (frames, monitors) are measured from the state at t = 0."},
+      }};
+  return t;
+}
+
 const Table& stabilisation_table() {
   static const Table t{
       "Stabilisation", "`solver.stabilisation`",
@@ -1059,7 +1091,7 @@ std::vector<const Table*> all_tables() {
           &slope_table(),     &footing_table(),  &gmsh_table(),      &surface_mesh_table(),
           &initial_table(),   &boundary_table(), &load_table(),      &region_table(),
           &time_table(),      &output_table(),   &monitor_table(),   &solver_table(),
-          &stabilisation_table()};
+          &stabilisation_table(), &initialisation_table()};
 }
 
 /// The parameter tables of a material model, besides material_table().
@@ -1251,6 +1283,7 @@ class SceneParser {
     parse_output(top.ok("output") ? top.get("output") : json::object(), top.at("output"));
     parse_solver(top.ok("solver") ? top.get("solver") : json::object(), top.at("solver"));
     if (top.ok("formulation")) resolve_formulation(top.str("formulation"), top.at("formulation"));
+    if (top.ok("initialisation")) parse_initialisation(top.get("initialisation"), top.at("initialisation"), top);
     if (s_.solver.stabilisation.pressure.empty()) {
       // The seeds' choices: seed 000 runs strain smoothing with the multi-field variational
       // pressure (basis not stated; the linear one is the smallest that keeps A5 bounded with FLIP
@@ -2039,6 +2072,32 @@ class SceneParser {
     sv.stabilisation.fbar = st.str("fbar", "none");
   }
 
+  void parse_initialisation(const json& j, const std::string& path, const Obj& top) {
+    const Obj o = check_object(c_, j, path, {&initialisation_table()});
+    Initialisation& in = s_.initialisation;
+    in.duration = o.num("duration");
+    in.gravity_ramp = o.has("gravity_ramp") ? o.num("gravity_ramp") : in.duration;
+    in.plasticity = o.ok("plasticity") && o.get("plasticity").get<bool>();
+    if (o.has("hydraulic_conductivity") && o.ok("hydraulic_conductivity"))
+      in.hydraulic_conductivity = o.num("hydraulic_conductivity");
+    in.tie_water = !o.ok("tie_water") || o.get("tie_water").get<bool>();
+    if (o.has("damping") && o.ok("damping")) in.damping = o.num("damping");
+    in.reset_displacement = !o.ok("reset_displacement") || o.get("reset_displacement").get<bool>();
+    if (o.ok("gravity_ramp") && o.ok("duration") && in.gravity_ramp > in.duration)
+      c_.error(o.at("gravity_ramp"), "got " + fmt_g(in.gravity_ramp) + ", expected a number in [0, duration = " +
+                                         fmt_g(in.duration) + "] [s]");
+    if (top.has("gravity_ramp") && s_.gravity_ramp > 0.0)
+      c_.error(top.at("gravity_ramp"), "got " + fmt_g(s_.gravity_ramp) + ", expected 0 with an initialisation phase "
+                                           "(gravity is full from t = 0; ramp it with initialisation.gravity_ramp)");
+    if (o.has("hydraulic_conductivity") && !s_.has_fluid())
+      c_.error(o.at("hydraulic_conductivity"), "got a value, but no body has a fluid; remove the key");
+    const bool double_point = s_.formulation == Formulation::semi_implicit_double_point ||
+                              s_.formulation == Formulation::explicit_double_point;
+    if (o.has("tie_water") && !double_point)
+      c_.error(o.at("tie_water"), "got a value, but only double-point formulations have water points to tie "
+                                  "(formulation \"" + to_string(s_.formulation) + "\"); remove the key");
+  }
+
   // -- formulation -----------------------------------------------------------------------------
 
   void resolve_formulation(const std::string& name, const std::string& path) {
@@ -2323,6 +2382,17 @@ nlohmann::json to_json(const Scene& s) {
     if (!l.function.expression.empty()) lj["function"] = l.function.expression;
     if (!l.function.table.empty()) lj["table"] = l.function.table;
     j["loads"].push_back(lj);
+  }
+
+  if (s.initialisation.enabled()) {
+    const Initialisation& in = s.initialisation;
+    json ij = {{"duration", in.duration}, {"gravity_ramp", in.gravity_ramp}, {"plasticity", in.plasticity},
+               {"reset_displacement", in.reset_displacement}};
+    if (in.hydraulic_conductivity) ij["hydraulic_conductivity"] = *in.hydraulic_conductivity;
+    if (in.damping) ij["damping"] = *in.damping;
+    if (s.formulation == Formulation::semi_implicit_double_point || s.formulation == Formulation::explicit_double_point)
+      ij["tie_water"] = in.tie_water;
+    j["initialisation"] = ij;
   }
 
   j["time"] = {{"end", s.time.end}, {"cfl", s.time.cfl}};

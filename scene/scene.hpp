@@ -171,6 +171,21 @@ struct Solver {
   int checkpoint_every = 50;     // steps between in-memory snapshots of the last good state
 };
 
+/// An initialisation phase before the analysis (seed 001 App. B.4): t runs from -duration to 0
+/// under gravity ramped from zero, with plasticity off, a high permeability and (double-point)
+/// the water points tied to their soil points, so that the analysis starts at t = 0 from an
+/// equilibrium state with dissipated pore pressures.
+struct Initialisation {
+  double duration = 0.0;      // s; 0: no initialisation phase
+  double gravity_ramp = 0.0;  // s from the start of the phase (<= duration)
+  bool plasticity = false;    // plastic flow allowed during the phase
+  std::optional<double> hydraulic_conductivity;  // m/s for every porous material during the phase
+  bool tie_water = true;      // double-point: water points follow their coincident soil points
+  std::optional<double> damping;  // local damping during the phase (default solver.damping)
+  bool reset_displacement = true;  // displacements are measured from the state at t = 0
+  bool enabled() const { return duration > 0.0; }
+};
+
 struct Scene {
   std::string name;
   int dimension = 2;
@@ -186,6 +201,7 @@ struct Scene {
   Time time;
   Output output;
   Solver solver;
+  Initialisation initialisation;
   std::string source_file;  // path of the scene file (for relative paths and messages)
 
   const Material& material(const std::string& name) const;

@@ -16,7 +16,8 @@
 namespace swmpm {
 
 struct StepContext {
-  double t = 0.0;   // s, time at the start of the step
+  double t = 0.0;   // s, time at the start of the step, as the loads' clock (0 during the
+                    // initialisation phase, which runs at negative times: loads act as at t = 0)
   double dt = 0.0;  // s
   std::array<double, 3> gravity{0, 0, 0};  // m/s^2, ramp applied
 };
@@ -78,6 +79,11 @@ class Formulation {
   virtual double strain_energy(const State<Dim>& s) const = 0;
   /// Power of body forces and tractions [W or W/m] at the state, with the loads of ctx.
   virtual double external_power(const State<Dim>& s, const StepContext& ctx) const = 0;
+  /// The initialisation phase (scene.initialisation) starts (`phase` set) or ends (nullptr):
+  /// plastic flow off or on in the material models, the phase's permeability and damping in
+  /// place of the scene's, and (double-point) the water points tied to their soil points.
+  /// Called between steps by the time loop.
+  virtual void set_initialisation(State<Dim>& s, const scene::Initialisation* phase) = 0;
   /// Cells holding at least one particle, at the last step.
   virtual std::size_t active_cells(const State<Dim>& s) const = 0;
   const StageTimes& stage_times() const { return times_; }

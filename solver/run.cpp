@@ -5,6 +5,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -124,22 +125,36 @@ class Runner {
 
     std::signal(SIGINT, on_sigint);
     const double end = scene_.time.end;
-    const double eps_t = 1e-12 * end;
+    const scene::Initialisation& init = scene_.initialisation;
+    const double t_start = init.enabled() ? -init.duration : 0.0;  // the initialisation runs before t = 0
+    const double eps_t = 1e-12 * (end - t_start);
+    bool initialising = init.enabled();
+    state_.time = t_start;
+    if (initialising) {
+      formulation->set_initialisation(state_, &init);
+      std::ostringstream os;
+      os << "initialisation from t = " << t_start << " s to 0: gravity ramped over " << init.gravity_ramp << " s, "
+         << (init.plasticity ? "plastic flow on" : "elastic (plastic flow off)");
+      if (init.hydraulic_conductivity) os << ", k = " << *init.hydraulic_conductivity << " m/s";
+      if (init.damping) os << ", damping " << *init.damping;
+      if (state_.fluid.size() && init.tie_water) os << ", water points tied to their soil points";
+      log_.line(os.str());
+    }
     double next_frame = 0.0, next_monitor = 0.0, work = 0.0;
     double dt_min = std::numeric_limits<double>::max(), dt_max = 0.0, dt = 0.0;
     ParticleSet<Dim> last_good, last_good_water;
     last_good.copy_state_from(state_.solid);
     last_good_water.copy_state_from(state_.fluid);
-    double last_good_time = 0.0;
+    double last_good_time = t_start;
     std::string status = "completed", diagnosis;
     const bool tty = !opt_.quiet && isatty(fileno(stderr));
     auto last_progress = std::chrono::steady_clock::now();
     const auto loop_start = last_progress;
 
-    write_frame(0.0);
-    next_frame = scene_.output.interval > 0 ? scene_.output.interval : end;
+    write_frame(t_start);
+    next_frame = scene_.output.interval > 0 ? t_start + scene_.output.interval : end;
     monitors.record(state_, *formulation, work);
-    next_monitor = scene_.output.monitor_interval;
+    next_monitor = t_start + scene_.output.monitor_interval;
 
     // Energy check: kinetic + stored energy can grow only by the work of gravity and loads
     // (damping, drag and plasticity dissipate). A step that creates energy many times over is an
@@ -148,7 +163,7 @@ class Runner {
     // next step's start power, one pass over the particles per step).
     const double energy0 = formulation->kinetic_energy(state_) + formulation->strain_energy(state_);
     double work_max = 0.0;
-    double power = formulation->external_power(state_, StepContext{0.0, 0.0, gravity_at(0.0)});
+    double power = formulation->external_power(state_, StepContext{0.0, 0.0, gravity_at(t_start)});
     auto energy_created = [&]() -> bool {
       const double e = formulation->kinetic_energy(state_) + formulation->strain_energy(state_);
       const double allowed = kEnergyFactor * (energy0 + work_max) + kEnergyFloor;
@@ -173,9 +188,9 @@ class Runner {
       } else {
         dt = *scene_.time.dt;
       }
-      const double dt_stable = dt;  // before the last step is shortened to land on time.end
-      dt = std::min(dt, end - state_.time);
-      StepContext ctx{state_.time, dt, gravity_at(state_.time)};
+      const double dt_stable = dt;  // before the last step is shortened to land on time.end (or on 0)
+      dt = std::min(dt, (initialising ? 0.0 : end) - state_.time);
+      StepContext ctx{load_clock(state_.time), dt, gravity_at(state_.time)};
       formulation->step(state_, ctx);
       if (!state_.health.ok()) {
         status = "diverged";
@@ -183,7 +198,7 @@ class Runner {
         break;
       }
       {  // trapezoidal rule on the power of external forces
-        StepContext end_ctx{state_.time + dt, dt, gravity_at(state_.time + dt)};
+        StepContext end_ctx{load_clock(state_.time + dt), dt, gravity_at(state_.time + dt)};
         const double power_end = formulation->external_power(state_, end_ctx);
         work += 0.5 * dt * (power + power_end);
         power = power_end;
@@ -194,8 +209,24 @@ class Runner {
       dt_min = std::min(dt_min, dt_stable);
       dt_max = std::max(dt_max, dt_stable);
 
+      bool phase_ended = false;
+      if (initialising && state_.time >= -eps_t) {  // t = 0: the analysis starts from this state
+        state_.time = 0.0;
+        initialising = false;
+        phase_ended = true;
+        formulation->set_initialisation(state_, nullptr);
+        if (init.reset_displacement) {
+          state_.solid.x0 = state_.solid.x;
+          state_.fluid.x0 = state_.fluid.x;
+        }
+        std::ostringstream os;
+        os << "initialisation done after " << state_.step << " steps: kinetic energy "
+           << formulation->kinetic_energy(state_) << " J, stored " << formulation->strain_energy(state_)
+           << " J; the analysis starts at t = 0" << (init.reset_displacement ? " (displacements measured from here)" : "");
+        log_.line(os.str());
+      }
       const bool checkpoint = state_.step % scene_.solver.checkpoint_every == 0;
-      const bool frame_due = state_.time >= next_frame - eps_t || state_.time >= end - eps_t;
+      const bool frame_due = state_.time >= next_frame - eps_t || state_.time >= end - eps_t || phase_ended;
       if ((state_.step % kEnergyCheckEvery == 0 || checkpoint || frame_due) && energy_created()) {
         status = "diverged";
         break;
@@ -205,7 +236,7 @@ class Runner {
         last_good_water.copy_state_from(state_.fluid);
         last_good_time = state_.time;
       }
-      if (state_.time >= next_monitor - eps_t) {
+      if (state_.time >= next_monitor - eps_t || phase_ended) {
         monitors.record(state_, *formulation, work);
         next_monitor += scene_.output.monitor_interval;
         if (scene_.output.monitor_interval > 0)
@@ -224,7 +255,7 @@ class Runner {
           last_progress = now;
           const double el = std::chrono::duration<double>(now - loop_start).count();
           const double rate = static_cast<double>(state_.step) / el;
-          const double eta = el * (end - state_.time) / std::max(state_.time, 1e-300);
+          const double eta = el * (end - state_.time) / std::max(state_.time - t_start, 1e-300);
           std::fprintf(stderr, "\r  t = %.4g / %.4g s | step %ld | %.0f steps/s | ETA %.0f s   ", state_.time, end,
                        state_.step, rate, eta);
           std::fflush(stderr);
@@ -314,10 +345,21 @@ class Runner {
   }
 
  private:
+  /// Gravity at time t: ramped over `gravity_ramp` from t = 0, or, with an initialisation phase,
+  /// over its `gravity_ramp` from its start at t = -duration (then full from t = 0).
   std::array<double, 3> gravity_at(double t) const {
-    const double r = scene_.gravity_ramp > 0 ? std::min(1.0, t / scene_.gravity_ramp) : 1.0;
+    const auto& in = scene_.initialisation;
+    double r = 1.0;
+    if (in.enabled()) {
+      if (t < 0.0 && in.gravity_ramp > 0.0) r = std::clamp((t + in.duration) / in.gravity_ramp, 0.0, 1.0);
+    } else if (scene_.gravity_ramp > 0.0) {
+      r = std::min(1.0, t / scene_.gravity_ramp);
+    }
     return {scene_.gravity[0] * r, scene_.gravity[1] * r, scene_.gravity[2] * r};
   }
+
+  /// The loads' clock: loads act during the initialisation phase (t < 0) as they do at t = 0.
+  static double load_clock(double t) { return std::max(t, 0.0); }
 
   std::string describe_failure(const ParticleSet<Dim>& before, const StepContext& ctx) const {
     const auto& h = state_.health;
@@ -327,7 +369,7 @@ class Runner {
     while (q < static_cast<long>(before.size()) && before.id[q] != state_.solid.id[p]) ++q;
     std::ostringstream os;
     os << h.phase << " particle " << state_.solid.id[p] << " (body \"" << scene_.bodies[state_.solid.body[p]].name
-       << "\") " << h.what << " in the step from t = " << ctx.t << " s (step " << state_.step + 1 << ", dt = " << ctx.dt
+       << "\") " << h.what << " in the step from t = " << state_.time << " s (step " << state_.step + 1 << ", dt = " << ctx.dt
        << " s); it was at (";
     for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << before.x[q][a];
     os << ") with speed " << before.v[q].norm() << " m/s at the last good state; now at (";

@@ -33,6 +33,7 @@ class Dry final : public Formulation<Dim> {
         loads_(s, grid_, state.solid, state.surfaces),
         flip_(s.solver.flip),
         damping_(s.solver.damping),
+        scene_damping_(s.solver.damping),
         materials_(make_materials<Dim>(s)),
         material_particles_(group_by_material(state.solid, s.materials.size())) {
     nodes_.resize(grid_.num_nodes());
@@ -123,6 +124,10 @@ class Dry final : public Formulation<Dim> {
     loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool) { power += f_p.dot(ps.v[p]); });
     return power;
   }
+  void set_initialisation(State<Dim>&, const scene::Initialisation* phase) override {
+    set_plastic(materials_, phase == nullptr || phase->plasticity);
+    damping_ = phase_damping(phase, scene_damping_);
+  }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
 
  private:
@@ -151,7 +156,7 @@ class Dry final : public Formulation<Dim> {
   Grid<Dim> grid_;
   GridBoundary<Dim> bcs_;
   ParticleLoads<Dim> loads_;
-  double flip_, damping_;
+  double flip_, damping_, scene_damping_;
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
   std::vector<std::vector<int>> material_particles_;
   NodeFields<Dim> nodes_;

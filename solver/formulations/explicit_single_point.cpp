@@ -38,7 +38,8 @@ constexpr double g_earth = 9.81;  // m/s^2, in the hydraulic-conductivity defini
 struct PoreFluid {
   double rho_f;  // kg/m^3, fluid density
   double K_f;    // Pa, fluid bulk modulus
-  double k;      // m/s, hydraulic conductivity of the skeleton
+  double k;      // m/s, hydraulic conductivity of the skeleton (the initialisation phase's while it runs)
+  double k_scene;  // m/s, the material's own
 };
 
 template <int Dim, class Shape>
@@ -53,6 +54,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
         loads_(s, grid_, state.solid, state.surfaces),
         flip_(s.solver.flip),
         damping_(s.solver.damping),
+        scene_damping_(s.solver.damping),
         smoothing_(s.solver.stabilisation.strain_smoothing),
         mfvp_order_(mfvp_order(s.solver.stabilisation.pressure)),
         materials_(make_materials<Dim>(s)),
@@ -66,7 +68,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     if (!state.solid.two_phase())
       throw std::runtime_error("explicit-single-point needs saturated particles (pore_pressure, porosity, fluid_mass "
                                "in particles/solid.vtu): run swmpm preprocess with a body that has a solid and a fluid");
-    pore_.resize(s.materials.size(), PoreFluid{0, 0, 0});
+    pore_.resize(s.materials.size(), PoreFluid{0, 0, 0, 0});
     for (std::size_t k = 0; k < s.materials.size(); ++k) {
       const auto& m = s.materials[k];
       if (m.model == scene::MaterialModel::fluid) continue;
@@ -85,6 +87,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
         throw std::runtime_error("material \"" + s.materials[state.solid.material[p]].name +
                                  "\": a saturated skeleton needs hydraulic_conductivity or intrinsic_permeability");
     }
+    for (auto& pf : pore_) pf.k_scene = pf.k;
     solid_.resize(grid_.num_nodes());
     fluid_.resize(grid_.num_nodes());
     drag_.assign(grid_.num_nodes(), 0.0);
@@ -207,6 +210,11 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       power += f_p.dot((1.0 - n) * ps.v[p] + n * ps.v_f[p]);
     });
     return power;
+  }
+  void set_initialisation(State<Dim>&, const scene::Initialisation* phase) override {
+    set_plastic(materials_, phase == nullptr || phase->plasticity);
+    damping_ = phase_damping(phase, scene_damping_);
+    for (auto& pf : pore_) pf.k = phase && phase->hydraulic_conductivity ? *phase->hydraulic_conductivity : pf.k_scene;
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
 
@@ -547,7 +555,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   Grid<Dim> grid_;
   GridBoundary<Dim> bcs_solid_, bcs_fluid_;
   ParticleLoads<Dim> loads_;
-  double flip_, damping_;
+  double flip_, damping_, scene_damping_;
   bool smoothing_;
   int mfvp_order_;  // -1 none, 0 constant, 1 linear, 2 quadratic basis Q
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;

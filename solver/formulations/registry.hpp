@@ -37,6 +37,18 @@ std::vector<std::unique_ptr<MaterialModel<Dim>>> make_materials(const scene::Sce
   return out;
 }
 
+/// Plastic flow on or off in every material model (the initialisation phase).
+template <int Dim>
+void set_plastic(std::vector<std::unique_ptr<MaterialModel<Dim>>>& materials, bool on) {
+  for (auto& m : materials)
+    if (m) m->set_plastic(on);
+}
+
+/// The damping of a step: the initialisation phase's while it runs (if it sets one), else the scene's.
+inline double phase_damping(const scene::Initialisation* phase, double scene_damping) {
+  return phase && phase->damping ? *phase->damping : scene_damping;
+}
+
 /// Particle indices of each material, in increasing index; regroup reuses the vectors' capacity.
 template <int Dim>
 void regroup_by_material(const ParticleSet<Dim>& ps, std::vector<std::vector<int>>& groups) {

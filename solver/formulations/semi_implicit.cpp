@@ -26,6 +26,8 @@
 //       (step 8h with the M_s erratum, eq. 36); stress by the material model
 #include <omp.h>
 
+#include <algorithm>
+
 #include <limits>
 #include <sstream>
 
@@ -87,6 +89,7 @@ class SemiImplicit final : public Formulation<Dim> {
         loads_(s, grid_, state.solid, state.surfaces),
         flip_(s.solver.flip),
         damping_(s.solver.damping),
+        scene_damping_(s.solver.damping),
         materials_(make_materials<Dim>(s)),
         material_particles_(group_by_material(state.solid, s.materials.size())),
         poisson_(grid_) {
@@ -252,6 +255,7 @@ class SemiImplicit final : public Formulation<Dim> {
       const long m_bad = materials_[k]->update_stress(ps, material_particles_[k], dt);
       if (m_bad >= 0) st.health.report(m_bad, "solid", "stress update failed (" + materials_[k]->name() + ")");
     }
+    if (tie_) tie_water_points(st);
     lap("stress and porosity");
   }
 
@@ -316,6 +320,19 @@ class SemiImplicit final : public Formulation<Dim> {
       power += f_p.dot((1.0 - n) * ps.v[p] + n * ps.v_f[p]);
     });
     return power;
+  }
+  void set_initialisation(State<Dim>& st, const scene::Initialisation* phase) override {
+    set_plastic(materials_, phase == nullptr || phase->plasticity);
+    damping_ = phase_damping(phase, scene_damping_);
+    if (scene_perm_.empty()) scene_perm_ = perm_;
+    perm_ = scene_perm_;
+    if (phase && phase->hydraulic_conductivity)
+      for (auto& pm : perm_) {
+        pm.k0 = *phase->hydraulic_conductivity;
+        pm.law = Permeability::Law::constant;
+      }
+    tie_ = double_point_ && phase && phase->tie_water;
+    if (tie_ && partner_.empty()) partner_ = coincident_soil_points(st);
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
 
@@ -716,6 +733,45 @@ class SemiImplicit final : public Formulation<Dim> {
     return bad == transfer::no_particle ? -1 : bad;
   }
 
+  /// For each water-point id, the id of the soil point seeded at the same place (preprocess seeds
+  /// the water of a saturated body on the soil's lattice), -1 for free water.
+  static std::vector<std::int64_t> coincident_soil_points(const State<Dim>& st) {
+    const ParticleSet<Dim>& ps = st.solid;
+    const ParticleSet<Dim>& ws = st.fluid;
+    auto less = [](const Vec<Dim>& a, const Vec<Dim>& b) {
+      return std::lexicographical_compare(a.data(), a.data() + Dim, b.data(), b.data() + Dim);
+    };
+    std::vector<int> order(ps.size());
+    for (std::size_t p = 0; p < ps.size(); ++p) order[p] = static_cast<int>(p);
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return less(ps.x0[a], ps.x0[b]); });
+    std::int64_t max_id = -1;
+    for (auto id : ws.id) max_id = std::max(max_id, id);
+    std::vector<std::int64_t> out(static_cast<std::size_t>(max_id + 1), -1);
+    for (std::size_t w = 0; w < ws.size(); ++w) {
+      const auto it = std::lower_bound(order.begin(), order.end(), ws.x0[w],
+                                       [&](int q, const Vec<Dim>& x) { return less(ps.x0[q], x); });
+      if (it != order.end() && ps.x0[*it] == ws.x0[w]) out[ws.id[w]] = ps.id[*it];
+    }
+    return out;
+  }
+
+  /// Initialisation phase (seed 001 §5.4): each water point takes the position of its coincident
+  /// soil point, so the points do not seep while gravity grows. Their velocities stay their own:
+  /// the grid still solves the Darcy flow that drains the excess pressure (resetting them to the
+  /// soil's each step would hold the water still and keep the layer undrained).
+  void tie_water_points(State<Dim>& st) const {
+    ParticleSet<Dim>& ws = st.fluid;
+    const ParticleSet<Dim>& ps = st.solid;
+    const long n = static_cast<long>(ws.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      const std::int64_t sid = partner_[ws.id[p]];
+      if (sid < 0) continue;
+      const int q = st.index_of_id[sid];
+      ws.x[p] = ps.x[q];
+    }
+  }
+
   /// (8h)-(8i) double-point: nodal porosity from the updated soil points (soil-mass weighted,
   /// divided by M_s: erratum of step 8h), interpolated at the water points (1 where no soil), and
   /// their volume V = m / (n rho_w) (eq. 36: n V = n0 V0). Shape data of the start of the step.
@@ -746,11 +802,14 @@ class SemiImplicit final : public Formulation<Dim> {
   Grid<Dim> grid_;
   GridBoundary<Dim> bcs_solid_, bcs_fluid_;
   ParticleLoads<Dim> loads_;
-  double flip_, damping_;
+  double flip_, damping_, scene_damping_;
   Remap remap_ = Remap::node;
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
   std::vector<std::vector<int>> material_particles_;
-  std::vector<Permeability> perm_;          // per solid material
+  std::vector<Permeability> perm_;          // per solid material (the initialisation phase's while it runs)
+  std::vector<Permeability> scene_perm_;    // per solid material, as the scene gives it
+  bool tie_ = false;                        // initialisation: water points follow their soil points
+  std::vector<std::int64_t> partner_;       // per water-point id: the coincident soil point's id (-1: none)
   std::vector<int> fluid_of_material_;      // per solid material: its pore water's material
   std::vector<double> rho_w_points_;        // per fluid material (double-point water points)
   std::array<bool, 6> face_drained_{};

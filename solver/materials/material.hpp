@@ -35,6 +35,10 @@ class MaterialModel {
     (void)ps, (void)ids;
     return p_wave_modulus();
   }
+  /// Plastic flow on (the default) or off: with it off, a plastic model returns its elastic trial
+  /// stress and leaves its internal variables alone (the initialisation phase, seed 001 App. B.4).
+  /// Called between steps, never per particle; elastic models ignore it.
+  virtual void set_plastic(bool on) { (void)on; }
   /// Stored elastic energy of particle p [J, or J/m in plane strain].
   virtual double strain_energy(const ParticleSet<Dim>& ps, int p) const = 0;
   /// Names of state quantities the model reports beside the stress (Nor-Sand: specific_volume,

@@ -37,6 +37,7 @@ class MohrCoulomb final : public MaterialModel<Dim> {
   MohrCoulomb(Elastic e, mc::Params p, bool finite) : e_(e), p_(p), finite_(finite) {}
   std::string name() const override { return "mohr-coulomb"; }
   double p_wave_modulus() const override { return e_.p_wave(); }
+  void set_plastic(bool on) override { plastic_ = on; }
 
   long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double dt) const override {
     return update_each(ps, ids, [&](int p) { return finite_ ? finite_strain(ps, p, dt) : small_strain(ps, p, dt); });
@@ -54,6 +55,12 @@ class MohrCoulomb final : public MaterialModel<Dim> {
   }
 
  private:
+  /// The return mapping, or the elastic trial itself while plastic flow is off.
+  mc::Return admissible(const Principal& trial) const {
+    if (plastic_) return mc::return_map(p_, trial);
+    return mc::Return{trial, Principal::Zero(), mc::Region::elastic};
+  }
+
   void add_plastic(ParticleSet<Dim>& ps, int p, const mc::Return& r) const {
     if (r.region != mc::Region::elastic) ps.eps_p[p] += mc::equivalent_plastic_increment(r.deps_p);
   }
@@ -73,7 +80,7 @@ class MohrCoulomb final : public MaterialModel<Dim> {
       Eig2 et;
       if (!spectral::plane_strain_trial(en, eps_n[0], eps_n[1], dF, et)) return false;
       const Principal eps(0.5 * std::log(et.l1), 0.5 * std::log(et.l2), eps_n[2]);
-      const mc::Return r = mc::return_map(p_, p_.stiffness(eps));
+      const mc::Return r = admissible(p_.stiffness(eps));
       const Sym2 t = rebuild(et, r.s[0], r.s[1]);
       s << t.xx / J, t.yy / J, r.s[2] / J, t.xy / J, 0.0, 0.0;
       add_plastic(ps, p, r);
@@ -87,7 +94,7 @@ class MohrCoulomb final : public MaterialModel<Dim> {
       eig.computeDirect(0.5 * (Bt + Bt.transpose()));
       const Principal beta = eig.eigenvalues();
       if (!(beta.minCoeff() > 0.0)) return false;
-      const mc::Return r = mc::return_map(p_, p_.stiffness(0.5 * beta.array().log().matrix()));
+      const mc::Return r = admissible(p_.stiffness(0.5 * beta.array().log().matrix()));
       const Mat3& Q = eig.eigenvectors();
       s = to_voigt(Q * (r.s / J).asDiagonal() * Q.transpose());
       add_plastic(ps, p, r);
@@ -108,7 +115,7 @@ class MohrCoulomb final : public MaterialModel<Dim> {
       const double szz = s[2] + dt * lam_tr;
       const double sxy = s[3] + dt * (2.0 * G * dxy + w * (s[1] - s[0]));
       const Eig2 e = eig2(sxx, syy, sxy);
-      const mc::Return r = mc::return_map(p_, Principal(e.l1, e.l2, szz));
+      const mc::Return r = admissible(Principal(e.l1, e.l2, szz));
       const Sym2 t = rebuild(e, r.s[0], r.s[1]);
       s << t.xx, t.yy, r.s[2], t.xy, 0.0, 0.0;
       add_plastic(ps, p, r);
@@ -119,7 +126,7 @@ class MohrCoulomb final : public MaterialModel<Dim> {
       const Mat3 tr = sm + dt * (e_.lambda * D.trace() * Mat3::Identity() + 2.0 * G * D + W * sm - sm * W);
       Eigen::SelfAdjointEigenSolver<Mat3> eig;
       eig.computeDirect(0.5 * (tr + tr.transpose()));
-      const mc::Return r = mc::return_map(p_, eig.eigenvalues());
+      const mc::Return r = admissible(eig.eigenvalues());
       const Mat3& Q = eig.eigenvectors();
       s = to_voigt(Q * r.s.asDiagonal() * Q.transpose());
       add_plastic(ps, p, r);
@@ -130,6 +137,7 @@ class MohrCoulomb final : public MaterialModel<Dim> {
   Elastic e_;
   mc::Params p_;
   bool finite_;
+  bool plastic_ = true;
 };
 
 }  // namespace

@@ -60,6 +60,9 @@ class NorSand final : public MaterialModel<Dim> {
  public:
   explicit NorSand(ns::Params p) : p_(p) {}
   std::string name() const override { return "nor-sand"; }
+  /// Off: the hyperelastic trial (NS2) is the stress and π_i stays unset, so that the first plastic
+  /// step takes it from the stress then (App. B.4: p0, ε_v0^e from the end of elastic loading, eq. 113).
+  void set_plastic(bool on) override { plastic_ = on; }
 
   /// K + 4G/3 at zero elastic strain: K = p̂(0)/κ̃ (formulations ask max_p_wave_modulus instead).
   double p_wave_modulus() const override { return modulus_at(p_.p_unstrained()); }
@@ -125,7 +128,7 @@ class NorSand final : public MaterialModel<Dim> {
       const Principal eps_n = Principal::Constant(c.A) + c.B * tau_n;
       Eig2 et;
       if (!spectral::plane_strain_trial(en, eps_n[0], eps_n[1], dF, et)) return false;
-      r = ns::return_map(p_, Principal(0.5 * std::log(et.l1), 0.5 * std::log(et.l2), eps_n[2]), v, st);
+      r = admissible(Principal(0.5 * std::log(et.l1), 0.5 * std::log(et.l2), eps_n[2]), v, st);
       if (!r.converged) return false;
       const Sym2 t = rebuild(et, r.tau[0], r.tau[1]);
       s << t.xx / J, t.yy / J, r.tau[2] / J, t.xy / J, 0.0, 0.0;
@@ -139,11 +142,12 @@ class NorSand final : public MaterialModel<Dim> {
       eig.computeDirect(0.5 * (Bt + Bt.transpose()));
       const Principal beta = eig.eigenvalues();
       if (!(beta.minCoeff() > 0.0)) return false;
-      r = ns::return_map(p_, 0.5 * beta.array().log().matrix(), v, st);
+      r = admissible(0.5 * beta.array().log().matrix(), v, st);
       if (!r.converged) return false;
       const Mat3& Q = eig.eigenvectors();
       s = to_voigt(Q * (r.tau / J).asDiagonal() * Q.transpose());
     }
+    if (!plastic_) return true;  // elastic phase: the internal variables wait (π_i unset)
     // Internal variables: π_i, Ē_d^p, and ψ_i frozen where Ē_d^p passes the cut-off start (eq. 92).
     if (st.Ed <= p_.cutoff_start && st.Ed + r.dEd > p_.cutoff_start) st.psi_start = r.psi_i;
     st.Ed += r.dEd;
@@ -151,6 +155,16 @@ class NorSand final : public MaterialModel<Dim> {
     st.store(ps.state[p]);
     ps.eps_p[p] += r.dEp;
     return true;
+  }
+
+  /// The return mapping, or the elastic trial (NS2) while plastic flow is off.
+  ns::Return admissible(const Principal& eps_tr, double v, const ns::State& st) const {
+    if (plastic_) return ns::return_map(p_, eps_tr, v, st);
+    ns::Return r;
+    r.tau = ns::elastic(p_, eps_tr).tau;
+    r.eps_e = eps_tr;
+    r.pi = st.pi;
+    return r;
   }
 
   /// NS4 for principal Kirchhoff stresses; ε_e = 0 (A = B = 0) for a point without compression.
@@ -168,6 +182,7 @@ class NorSand final : public MaterialModel<Dim> {
   }
 
   ns::Params p_;
+  bool plastic_ = true;
 };
 
 }  // namespace

@@ -461,3 +461,36 @@ TEST(MohrCoulomb, StrainEnergyIsTheElasticEnergy) {
   std::printf("strain energy: %.12g J vs hencky %.12g J\n", model->strain_energy(a, 0), ref->strain_energy(b, 0));
   EXPECT_NEAR(model->strain_energy(a, 0), ref->strain_energy(b, 0), 1e-9 * ref->strain_energy(b, 0));
 }
+
+TEST(MohrCoulomb, PlasticFlowSwitchedOffIsTheElasticModel) {
+  // The initialisation phase (set_plastic(false)): a weak soil driven far beyond yield responds as
+  // its elastic part (hencky / linear-elastic) with no plastic strain; switched on again, the next
+  // step returns the stress to the surface.
+  scene::Material weak = mc_material(1e3, 30, 0, 1.0, 1e13), hencky = weak, linear = weak;
+  hencky.model = scene::MaterialModel::hencky;
+  linear.model = scene::MaterialModel::linear_elastic;
+  MatD<2> L;
+  L << -0.2, 0.15, 0.05, 0.1;
+  for (const char* kin : {"finite-strain", "small-strain"}) {
+    const bool finite = std::string(kin) == "finite-strain";
+    auto model = make_material<2>(weak, kinematics(kin));
+    const auto ref = make_material<2>(finite ? hencky : linear, kinematics(kin));
+    model->set_plastic(false);
+    auto a = one_particle<2>(), b = one_particle<2>();
+    drive<2>(*model, a, L, 1e-3, 200);
+    drive<2>(*ref, b, L, 1e-3, 200);
+    const double err = (a.sigma[0] - b.sigma[0]).norm() / b.sigma[0].norm();
+    EXPECT_LT(err, 1e-11) << kin;
+    EXPECT_EQ(a.eps_p[0], 0.0) << kin;
+    model->set_plastic(true);
+    drive<2>(*model, a, L, 1e-3, 1);
+    const mc::Params m = params(1e3, 30, 0);
+    Eigen::SelfAdjointEigenSolver<Mat3> e(to_matrix(a.sigma[0]));
+    const double J = finite ? a.F[0].determinant() : 1.0;  // the surface is in Kirchhoff stress
+    std::printf("plasticity off for 200 steps (%s): |sigma - elastic| / |elastic| = %.1e; on: eps_p %.3g, "
+                "yield function %.2e of |sigma|\n", kin, err, a.eps_p[0],
+                mc::yield_function(m, J * Principal(e.eigenvalues())) / a.sigma[0].norm());
+    EXPECT_GT(a.eps_p[0], 1e-3) << kin;
+    EXPECT_LT(std::abs(mc::yield_function(m, J * Principal(e.eigenvalues()))), 1e-8 * J * a.sigma[0].norm()) << kin;
+  }
+}

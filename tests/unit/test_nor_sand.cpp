@@ -426,3 +426,36 @@ TEST(NorSand, NeedsFiniteStrainAndMaterialState) {
   // The report columns of swmpm element.
   EXPECT_EQ(model->report_names(), (std::vector<std::string>{"specific_volume", "state_parameter"}));
 }
+
+TEST(NorSand, ElasticPhaseLeavesTheImagePressureUnsetUntilPlasticityStarts) {
+  // Seed 001 App. B.4: during the elastic gravity phase the hyperelastic law alone gives the
+  // stress (NS2), π_i stays unset, and when plasticity starts the first step takes π_i from the
+  // stress reached (OCR = 1: on the yield surface, eq. 113 generalised to q > 0).
+  const ns::Params m = hostun(1.85);
+  auto model = make_material<3>(material(1.85), finite_strain());
+  model->set_plastic(false);
+  auto ps = one_particle<3>(isotropic(50e3));
+  MatD<3> L = MatD<3>::Zero();
+  L(0, 0) = L(1, 1) = 0.25, L(2, 2) = -1.0;  // compression with shear: q/p' rises well past M
+  drive<3>(*model, ps, L, 1e-4, 20);
+  EXPECT_EQ(ps.state[0], MaterialState{});
+  EXPECT_EQ(ps.eps_p[0], 0.0);
+  const double J = ps.F[0].determinant();
+  const double p = J * mean_stress(ps.sigma[0]), q = J * deviatoric_stress(ps.sigma[0]);
+  // The elastic law: the principal strains of F (b_e = F Fᵀ from the isotropic start) give τ.
+  Eigen::SelfAdjointEigenSolver<Mat3> e(ps.F[0] * ps.F[0].transpose());
+  const Principal eps = 0.5 * e.eigenvalues().array().log().matrix() + isotropic_strain(m, 50e3);
+  const ns::Elastic el = ns::elastic(m, eps);
+  const Principal tau = J * Principal(Eigen::SelfAdjointEigenSolver<Mat3>(to_matrix(ps.sigma[0])).eigenvalues());
+  Principal sorted = el.tau;
+  std::sort(sorted.data(), sorted.data() + 3);
+  EXPECT_LT((tau - sorted).norm(), 1e-9 * tau.norm());
+  ASSERT_GT(q / p, 1.2 * m.M);  // far outside any surface through p at the isotropic start
+  model->set_plastic(true);
+  drive<3>(*model, ps, L, 1e-9, 1);  // a vanishing increment: π_i from the stress reached
+  const double pi = ps.state[0][0];
+  std::printf("elastic phase: q/p' = %.3f at the end, pi_i unset; first plastic step: pi_i = %.4g Pa, "
+              "F(p, q, pi_i) = %.2e of p\n", q / p, pi, ns::yield_function(m, p, q, pi) / p);
+  EXPECT_GT(pi, 0.0);
+  EXPECT_NEAR(ns::yield_function(m, p, q, pi), 0.0, 1e-6 * p);
+}
