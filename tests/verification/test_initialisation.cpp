@@ -18,6 +18,7 @@
 
 #include "scene/pointcloud.hpp"
 #include "support/run_helpers.hpp"
+#include "support/slope_scene.hpp"
 
 namespace {
 
@@ -32,35 +33,14 @@ swmpm::scene::PointCloud frame_at(const std::string& run, double t, const std::s
   return {};
 }
 
-/// A dry c-φ slope (as MohrCoulombTriaxial.SlopeStandsAndFailsWithStrengthReduction: 7 m high
-/// in all, 45° face, c = 20 kPa, φ = 30°, ψ = 0, ρ = 2000) with no initial stress and a 1 s
-/// initialisation phase (gravity over 0.6 s, damping 0.3).
+/// The dry c-φ slope of tests/support/slope_scene.hpp with no initial stress and a 1 s
+/// initialisation phase (gravity over 0.6 s, damping 0.3), to 2 s.
 json dry_slope(double srf, bool plastic_phase) {
-  return {
-      {"name", "init-slope"},
-      {"dimension", 2},
-      {"formulation", "dry"},
-      {"gravity", {0.0, -9.81}},
-      {"grid", {{"cell_size", 0.5}, {"min", {0.0, 0.0}}, {"max", {13.0, 8.5}}, {"shape_function", "gimp"}}},
-      {"materials",
-       {{{"name", "soil"}, {"model", "mohr-coulomb"}, {"density", 2000.0}, {"youngs_modulus", 2e7},
-         {"poisson_ratio", 0.3}, {"cohesion", 20e3}, {"friction_angle", 30.0}, {"dilation_angle", 0.0},
-         {"strength_reduction_factor", srf}}}},
-      {"bodies",
-       {{{"name", "slope"},
-         {"geometry",
-          {{"type", "slope"}, {"foundation_depth", 2.0}, {"height", 5.0}, {"angle", 45.0}, {"toe_length", 3.0},
-           {"crest_length", 5.0}}},
-         {"solid", "soil"},
-         {"particles_per_cell", 2}}}},
-      {"boundaries",
-       {{{"on", "x_min"}, {"solid", "roller"}}, {{"on", "x_max"}, {"solid", "roller"}},
-        {{"on", "y_min"}, {"solid", "fixed"}}}},
-      {"initialisation", {{"duration", 1.0}, {"gravity_ramp", 0.6}, {"damping", 0.3}, {"plasticity", plastic_phase}}},
-      {"time", {{"end", 2.0}, {"dt", "auto"}, {"cfl", 0.5}}},
-      {"solver", {{"flip", 0.99}, {"damping", 0.1}}},
-      {"output", {{"interval", 0.5}, {"monitor_interval", 0.01},
-                  {"monitors", {{{"name", "crest"}, {"at", {8.5, 6.75}}, {"quantities", {"displacement_y"}}}}}}}};
+  json s = swmpm::testing::dry_mc_slope("init-slope", srf, 2.0);
+  s["initialisation"] = {{"duration", 1.0}, {"gravity_ramp", 0.6}, {"damping", 0.3}, {"plasticity", plastic_phase}};
+  s["output"]["interval"] = 0.5;
+  s["output"]["monitors"] = {{{"name", "crest"}, {"at", {8.5, 6.75}}, {"quantities", {"displacement_y"}}}};
+  return s;
 }
 
 double max_of(const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); }

@@ -20,6 +20,7 @@
 #include <cmath>
 
 #include "support/run_helpers.hpp"
+#include "support/slope_scene.hpp"
 
 namespace {
 
@@ -157,34 +158,10 @@ TEST(MohrCoulombTriaxial, FailureAtTheMohrCoulombStressRatio) {
 // over the height; the sudden gravity of the geostatic start adds a dynamic overshoot).
 TEST(MohrCoulombTriaxial, SlopeStandsAndFailsWithStrengthReduction) {
   auto slope = [](double srf) {
-    json s = {
-        {"name", "mc-slope"},
-        {"dimension", 2},
-        {"formulation", "dry"},
-        {"gravity", {0.0, -9.81}},
-        {"grid", {{"cell_size", 0.5}, {"min", {0.0, 0.0}}, {"max", {13.0, 8.5}}, {"shape_function", "gimp"}}},
-        {"materials",
-         {{{"name", "soil"}, {"model", "mohr-coulomb"}, {"density", 2000.0}, {"youngs_modulus", 2e7},
-           {"poisson_ratio", 0.3}, {"cohesion", 20e3}, {"friction_angle", 30.0}, {"dilation_angle", 0.0},
-           {"strength_reduction_factor", srf}}}},
-        {"bodies",
-         {{{"name", "slope"},
-           {"geometry",
-            {{"type", "slope"}, {"foundation_depth", 2.0}, {"height", 5.0}, {"angle", 45.0},
-             {"toe_length", 3.0}, {"crest_length", 5.0}}},
-           {"solid", "soil"},
-           {"particles_per_cell", 2},
-           {"initial", {{"stress", "geostatic"}, {"k0", 0.5}}}}}},
-        {"boundaries",
-         {{{"on", "x_min"}, {"solid", "roller"}}, {{"on", "x_max"}, {"solid", "roller"}},
-          {{"on", "y_min"}, {"solid", "fixed"}}}},
-        {"time", {{"end", 3.0}, {"dt", "auto"}, {"cfl", 0.5}}},
-        {"solver", {{"flip", 0.99}, {"damping", 0.1}}},
-        {"output",
-         {{"interval", 0.0},
-          {"monitor_interval", 0.01},
-          {"monitors",
-           {{{"name", "crest"}, {"at", {8.5, 6.75}}, {"quantities", {"displacement_x", "displacement_y", "plastic_strain"}}}}}}}};
+    json s = swmpm::testing::dry_mc_slope("mc-slope", srf, 3.0);
+    s["bodies"][0]["initial"] = {{"stress", "geostatic"}, {"k0", 0.5}};
+    s["output"]["monitors"] = {{{"name", "crest"}, {"at", {8.5, 6.75}},
+                                {"quantities", {"displacement_x", "displacement_y", "plastic_strain"}}}};
     return s;
   };
   struct Out {
