@@ -5,6 +5,10 @@ linear-elastic box of ~10k, 100k and 1M particles and a 3D box, runs `swmpm prep
 from each run.json.
 
 --formulation dry (default): a dry box under gravity.
+--formulation semi-implicit-single-point|semi-implicit-double-point: the same box saturated, incompressible
+  constituents, free drained top, dt = 0.4 of the soil's P-wave limit (the pressure is implicit).
+  Particles counted: soil points plus water points (double-point).
+--shape linear|gimp|bspline2|bspline3 (default gimp).
 --formulation explicit-single-point: the same box saturated (n = 0.3, k = 1e-3 m/s, K_f = 2.2 GPa),
   geostatic and hydrostatic initial state, impermeable sides and base, with the scene's default
   stabilisation (cell-average strain smoothing + node-based MFVP, linear basis); dt = 0.4 of the
@@ -23,7 +27,7 @@ SIZES = {  # name: (dimension, cells per side along x/y(/z), extent)
     "3d-100k": (3, 30, 3.0),
 }
 
-def scene(dim, n, extent, steps, formulation="dry"):
+def scene(dim, n, extent, steps, formulation="dry", shape="gimp"):
     h = extent / n
     lo = [0.0] * dim
     hi_grid = [extent + 2 * h] * dim
@@ -34,6 +38,29 @@ def scene(dim, n, extent, steps, formulation="dry"):
     E, rho = 1.0e7, 2000.0
     c = ((E / rho)) ** 0.5
     dt = 0.4 * h / c
+    if formulation.startswith("semi-implicit"):
+        # Incompressible constituents: dt from the soil's own P-wave (the pressure is implicit).
+        nu, n_por, rho_s, rho_w = 0.3, 0.3, 2650.0, 1000.0
+        M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+        rho_sat = (1 - n_por) * rho_s + n_por * rho_w
+        dt = 0.4 * h / (M / rho_sat) ** 0.5
+        return {
+            "name": f"bench-si-{dim}d-{n}",
+            "dimension": dim,
+            "formulation": formulation,
+            "gravity": g,
+            "grid": {"cell_size": h, "min": lo, "max": hi_grid, "shape_function": shape},
+            "materials": [{"name": "soil", "model": "linear-elastic", "grain_density": rho_s, "porosity": n_por,
+                           "youngs_modulus": E, "poisson_ratio": nu, "hydraulic_conductivity": 1e-3},
+                          {"name": "water", "model": "fluid", "density": rho_w, "bulk_modulus": 2.2e9}],
+            "bodies": [{"name": "box", "geometry": {"type": "box", "min": lo, "max": hi_body},
+                        "solid": "soil", "fluid": "water", "particles_per_cell": 2,
+                        "initial": {"stress": "geostatic", "k0": 0.5, "pore_pressure": "hydrostatic"}}],
+            "boundaries": [{"on": f, "solid": "roller", "fluid": "impermeable"} for f in faces]
+                          + [{"on": "y_min", "solid": "fixed", "fluid": "impermeable"}],
+            "time": {"end": steps * dt * (1 - 1e-9), "dt": dt},
+            "output": {"interval": 0.0},
+        }
     if formulation == "explicit-single-point":
         nu, n_por, Kf, rho_s, rho_w = 0.3, 0.3, 2.2e9, 2650.0, 1000.0
         M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
@@ -44,7 +71,7 @@ def scene(dim, n, extent, steps, formulation="dry"):
             "dimension": dim,
             "formulation": formulation,
             "gravity": g,
-            "grid": {"cell_size": h, "min": lo, "max": hi_grid, "shape_function": "gimp"},
+            "grid": {"cell_size": h, "min": lo, "max": hi_grid, "shape_function": shape},
             "materials": [{"name": "soil", "model": "linear-elastic", "grain_density": rho_s, "porosity": n_por,
                            "youngs_modulus": E, "poisson_ratio": nu, "hydraulic_conductivity": 1e-3},
                           {"name": "water", "model": "fluid", "density": rho_w, "bulk_modulus": Kf}],
@@ -61,7 +88,7 @@ def scene(dim, n, extent, steps, formulation="dry"):
         "dimension": dim,
         "formulation": "dry",
         "gravity": g,
-        "grid": {"cell_size": h, "min": lo, "max": hi_grid, "shape_function": "gimp"},
+        "grid": {"cell_size": h, "min": lo, "max": hi_grid, "shape_function": shape},
         "materials": [{"name": "m", "model": "linear-elastic", "density": rho,
                         "youngs_modulus": E, "poisson_ratio": 0.3}],
         "bodies": [{"name": "box", "geometry": {"type": "box", "min": lo, "max": hi_body},
@@ -88,21 +115,23 @@ def main():
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--out", default="")
-    ap.add_argument("--formulation", default="dry", choices=["dry", "explicit-single-point"])
+    ap.add_argument("--formulation", default="dry", choices=["dry", "explicit-single-point", "semi-implicit-single-point",
+                                                             "semi-implicit-double-point"])
+    ap.add_argument("--shape", default="gimp", choices=["linear", "gimp", "bspline2", "bspline3"])
     ap.add_argument("--repeat", type=int, default=3,
                     help="runs per case; the table gives the fastest (timing noise on shared machines is additive) and the median")
     a = ap.parse_args()
     work = tempfile.mkdtemp(prefix="swmpm-bench-")
-    base = run(a.swmpm, scene(2, 2, 0.2, 2, a.formulation), 1, work)["peak_memory_bytes"]
+    base = run(a.swmpm, scene(2, 2, 0.2, 2, a.formulation, a.shape), 1, work)["peak_memory_bytes"]
     rows = []
     for name in a.sizes.split(","):
         dim, n, ext = SIZES[name]
         for t in [int(x) for x in a.threads.split(",")]:
-            runs = [run(a.swmpm, scene(dim, n, ext, a.steps, a.formulation), t, work) for _ in range(a.repeat)]
+            runs = [run(a.swmpm, scene(dim, n, ext, a.steps, a.formulation, a.shape), t, work) for _ in range(a.repeat)]
             runs.sort(key=lambda r: r["loop_us_per_particle_step"])
             r = runs[0]
             median = runs[len(runs) // 2]["loop_us_per_particle_step"]
-            parts = r["particles"]["solid"]
+            parts = r["particles"]["solid"] + r["particles"].get("fluid", 0)
             mem = (max(x["peak_memory_bytes"] for x in runs) - base) / parts
             rows.append((name, dim, parts, t, r["steps"], r["loop_us_per_particle_step"], median, mem, r["stage_seconds"]))
             print(f"{name:8s} {dim}D {parts:>8d} particles, {t} thread(s): {r['loop_us_per_particle_step']:.4f} us/particle-step "
@@ -117,7 +146,7 @@ def main():
     title = "Dry MPM" if a.formulation == "dry" else a.formulation
     lines = [f"# {title} speed — {datetime.date.today()}", "",
              f"Machine: {cpu}, {os.cpu_count()} cores, {platform.platform()}.",
-             f"Scene: GIMP, linear-elastic box under gravity ({a.formulation}), 2x2(x2) particles per cell, MUSL, {a.steps} steps. "
+             f"Scene: {a.shape}, linear-elastic box under gravity ({a.formulation}), 2x2(x2) particles per cell, MUSL, {a.steps} steps. "
              f"Time per particle-step is the time loop's (run.json loop_us_per_particle_step); best and median of {a.repeat} runs.", "",
              "| case | dim | particles | threads | steps | us per particle-step, best | median | bytes per particle |",
              "|---|---|---|---|---|---|---|---|"]

@@ -15,12 +15,15 @@
 //   (0) reorder points into scatter order every 10 steps (memory locality only)
 //   (1) shape data of soil (and water) points, active node box, scatter schedules
 //   (2) P2G: M_s, M_s v_s, nodal porosity and conductivity (soil-mass weighted, eqs. 44-47),
-//       water mass and momentum (eqs. 50-51), forces with the pressure p^t of the points
-//   (3)-(4) water predictor with the drag implicit in v_w* (eq. 53), soil predictor (eq. 52); BCs
-//   (5) pressure increment: L dp = -(1/dt) [D_s v_s* + D_w v_w*] (eqs. 60-63, L symmetric: c(n)
-//       inside the quadrature), p^{t+1} = p_D on free-surface / drained nodes; CHOLMOD
-//   (6) corrections v^{t+1} = v* - dt/M (G dp) (eqs. 64-68); BCs on v^{t+1}; pressure update
-//       (incremental, or node-wise remap eq. 77)
+//       water mass and momentum (eqs. 50-51), effective-stress and body forces
+//   (5a)-(5b) L, D_s, D_w (eqs. 61-63, L symmetric: c(n) inside the quadrature), the nodal p^t
+//       (linear projection of the points' pressures), free-surface and drained nodes
+//   (3)-(4) water predictor with the drag implicit in v_w* (eq. 53), soil predictor (eq. 52), with
+//       the pressure force -G p^t of the same gradient operator G as the corrections; BCs
+//   (5c) pressure increment: L dp = -(1/dt) [D_s v_s* + D_w v_w*] (eq. 60), p^{t+1} = p_D on
+//       free-surface / drained nodes; CHOLMOD
+//   (6) corrections v^{t+1} = v* - dt/M (G dp) (eqs. 64-68, G the strong gradient S_K grad S_J);
+//       BCs on v^{t+1}; pressure update (incremental, or node-wise remap eq. 77)
 //   (7) G2P (FLIP/PIC), positions; MUSL remap of the soil velocity (step 8a)
 //   (8) F, V, porosity (1 - n) J = 1 - n0, permeability law; water-point porosity and volume
 //       (step 8h with the M_s erratum, eq. 36); stress by the material model
@@ -66,11 +69,13 @@ struct Permeability {
   }
 };
 
-/// A volume fraction of a node's support below this counts as not full: the node is on the free
-/// surface of the water and gets p = 0 (Kularathna & Soga 2017, seed-notes seed 001 item 7). A
-/// node on a flat surface through the nodes has 0.5 with linear/GIMP shapes; the first row of
-/// quadratic B-spline nodes inside has 5/6.
+/// Linear/GIMP: a volume fraction of a node's support below this counts as not full: the node is
+/// on the free surface of the water and gets p = 0 (Kularathna & Soga 2017, seed-notes seed 001
+/// item 7). A node on a flat surface through the nodes has 0.5.
 constexpr double kFullSupport = 0.6;
+/// B-splines: a node whose support reaches more than this many cells beyond the water is on the
+/// free surface (see free_surface()).
+constexpr double kSurfaceCut = 0.25;
 
 template <int Dim, class Shape>
 class SemiImplicit final : public Formulation<Dim> {
@@ -100,11 +105,6 @@ class SemiImplicit final : public Formulation<Dim> {
     else
       throw std::runtime_error("solver.stabilisation.pressure: \"" + st.pressure + "\" is not available in " + name() +
                                " (available: node-remap, mfvp-linear, none)");
-    if constexpr (Shape::bspline)
-      throw std::runtime_error("grid.shape_function: \"" + scene::to_string(s.grid.shape_function) + "\" is not "
-                               "available in " + name() + " yet (use gimp or linear): with B-splines the pressure "
-                               "increment grows by a factor of about -5 per step near light free-surface and corner "
-                               "nodes (docs/verification.md, known problems)");
     if (st.fbar != "none")
       throw std::runtime_error("solver.stabilisation.fbar: F-bar is not implemented yet in this version");
     if (!state.solid.two_phase())
@@ -159,6 +159,7 @@ class SemiImplicit final : public Formulation<Dim> {
     water_.resize(nodes);
     node_.assign(nodes, NodeExtra{});
     support_.resize(nodes);
+    p_node_.assign(nodes, 0.0);
     for (std::size_t i = 0; i < nodes; ++i) support_[i] = support_integral(i);
     D_solid_.assign(nodes * KD, Vec<Dim>::Zero());
     D_water_.assign(nodes * KD, Vec<Dim>::Zero());
@@ -225,10 +226,13 @@ class SemiImplicit final : public Formulation<Dim> {
     }
     lap("p2g");
 
+    assemble_pressure(ps, ws);                                                              // (5a)-(5b)
+    lap("pressure assembly");
+
     predict(dt);                                                                            // (3)-(4)
     lap("predictor");
 
-    if (!solve_pressure(ps, ws, dt)) {                                                      // (5)
+    if (!solve_pressure(dt)) {                                                              // (5c)
       st.health.report(0, "fluid",
                        "pressure Poisson system not positive definite (water touching no drained node or free "
                        "surface has an undetermined pressure)");
@@ -344,8 +348,11 @@ class SemiImplicit final : public Formulation<Dim> {
     double mn = 0.0;        // sum S m_s n (nodal porosity x M_s, eq. 46)
     double mk = 0.0;        // sum S m_s k (eq. 47)
     double volume = 0.0;    // sum S V of the water points (fraction of the support filled)
+    // Extent of the water inside the node's support: min / max over its water points (S > 0) of
+    // x -/+ l per axis (the points' domains), for the free-surface nodes of B-splines.
+    Vec<Dim> lo = Vec<Dim>::Constant(std::numeric_limits<double>::infinity());
+    Vec<Dim> hi = Vec<Dim>::Constant(-std::numeric_limits<double>::infinity());
     double w_raw = 0.0;     // double-point: sum S rho_w V (M_w = n_I w_raw, eq. 50)
-    Vec<Dim> pgrad = Vec<Dim>::Zero();  // double-point: sum p V grad S of the water points
     double n = 1.0, k = 0.0;            // nodal porosity and conductivity
     double drag = 0.0;                  // Q_I dt (kg)
   };
@@ -390,11 +397,11 @@ class SemiImplicit final : public Formulation<Dim> {
   }
 
   /// (2) Soil points: M_s, M_s v_s, sum S m n, sum S m k (eqs. 44-47) and the soil's force
-  ///   f_s = sum_sp [ S m_s b - V sigma' . grad S ]  (+ single-point: (1 - n) p V grad S),
-  /// and, single-point, the water carried on the same points:
-  ///   M_w = sum S m_f, M_w v_w = sum S m_f v_f, f_w = sum [ S m_f b + n p V grad S ].
-  /// (The water's force is the weak form of -n grad p + n rho_w b, eqs. 56-57 with p_w = -p; the
-  /// soil takes the rest of the total pressure gradient, (1 - n) of it, eq. 55 minus eq. 57.)
+  ///   f_s = sum_sp [ S m_s b - V sigma' . grad S ],
+  /// and, single-point, the water carried on the same points (and its extent, free surface):
+  ///   M_w = sum S m_f, M_w v_w = sum S m_f v_f, f_w = sum S m_f b.
+  /// The pressure forces (-n grad p on the water, -(1 - n) grad p on the soil: eqs. 55-57 with
+  /// p_w = -p) are added at the nodes by the predictor, from the nodal p^t.
   void scatter_soil(const ParticleSet<Dim>& ps, const Vec<Dim>& b) {
     const bool sp = !double_point_;
     schedule_.run([&](int p) {
@@ -402,11 +409,11 @@ class SemiImplicit final : public Formulation<Dim> {
       const double n0 = 1.0 - (1.0 - n) * V / ps.V0[p];
       const double k = perm_[ps.material[p]].at(n, n0);
       const Mat3 sig = to_matrix(ps.sigma[p]);
-      const double pV = sp ? ps.p[p] * V : 0.0;
-      const MatD<Dim> A = V * sig.template topLeftCorner<Dim, Dim>() - (1.0 - n) * pV * MatD<Dim>::Identity();
+      const MatD<Dim> A = V * sig.template topLeftCorner<Dim, Dim>();
       const Vec<Dim> mv = m * ps.v[p], mb = m * b;
       const double mf = sp ? ps.m_f[p] : 0.0;
       const Vec<Dim> mfv = sp ? Vec<Dim>(mf * ps.v_f[p]) : Vec<Dim>::Zero(), mfb = mf * b;
+      const Vec<Dim> x_lo = ps.x[p] - ps.l[p], x_hi = ps.x[p] + ps.l[p];
       shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
         auto& s = soil_.acc[i];
         s.m += N * m;
@@ -419,40 +426,51 @@ class SemiImplicit final : public Formulation<Dim> {
           auto& w = water_.acc[i];
           w.m += N * mf;
           w.mv += N * mfv;
-          w.f += N * mfb + (n * pV) * dN;
+          w.f += N * mfb;
           e.volume += N * V;
+          if (N > 0.0 && mf > 0.0) {
+            e.lo = e.lo.cwiseMin(x_lo);
+            e.hi = e.hi.cwiseMax(x_hi);
+          }
         }
       });
     });
   }
 
-  /// (2) Water points (double-point, eqs. 50-51, 56-57): sum S rho_w V, sum S m v, sum S m (the
-  /// velocity weights of eq. 51), the raw body force sum S rho_w V b and pressure force
-  /// sum p V grad S; the node pass scales them by the nodal porosity.
+  /// (2) Water points (double-point, eqs. 50-51, 56): sum S rho_w V, sum S m v, sum S m (the
+  /// velocity weights of eq. 51) and the raw body force sum S rho_w V b, which the node pass
+  /// scales by the nodal porosity; the extent of the water in each support (free surface).
   void scatter_water_points(const ParticleSet<Dim>& ws, const Vec<Dim>& b) {
     wschedule_.run([&](int p) {
-      const double V = ws.V[p], m = ws.m[p], rhoV = rho_w_points_[ws.material[p]] * V, pV = ws.p[p] * V;
+      const double V = ws.V[p], m = ws.m[p], rhoV = rho_w_points_[ws.material[p]] * V;
       const Vec<Dim> mv = m * ws.v[p], rhoVb = rhoV * b;
-      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
+      const Vec<Dim> x_lo = ws.x[p] - ws.l[p], x_hi = ws.x[p] + ws.l[p];
+      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
         auto& w = water_.acc[i];
         w.m += N * m;
         w.mv += N * mv;
         w.f += N * rhoVb;
         auto& e = node_[i];
         e.w_raw += N * rhoV;
-        e.pgrad += pV * dN;
         e.volume += N * V;
+        if (N > 0.0) {
+          e.lo = e.lo.cwiseMin(x_lo);
+          e.hi = e.hi.cwiseMax(x_hi);
+        }
       });
     });
   }
 
   /// (3)-(4) per node, with v^t = M v / M and Q = g n M_w / k (eq. 58):
-  ///   (M_w + dt Q) v_w* = M_w v_w^t + dt (f_w + Q v_s^t)          (eq. 53)
-  ///   M_s (v_s* - v_s^t) = dt f_s + dt Q (v_w* - v_s^t)           (eq. 52 minus eq. 53)
-  /// then the velocity boundary conditions of each phase on v*.
+  ///   (M_w + dt Q) v_w* = M_w v_w^t + dt (f_w - G^w p^t + Q v_s^t)          (eq. 53)
+  ///   M_s (v_s* - v_s^t) = dt (f_s - G^s p^t) + dt Q (v_w* - v_s^t)          (eq. 52 minus eq. 53)
+  /// then the velocity boundary conditions of each phase on v*. The pressure force is the strong
+  /// form -sum_p c V S_K grad p^t(x_p) of the nodal p^t (eqs. 55, 57 integrated by parts), i.e.
+  /// the operator G of the corrections (6): see docs/formulations.md, "B-splines", for why the
+  /// weak form sum_p c V p_p grad S_K of the paper is unstable with B-splines.
   void predict(double dt) {
     const double alpha = damping_;
-    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto& ijk) {
       auto& s = soil_.acc[i];
       auto& w = water_.acc[i];
       auto& e = node_[i];
@@ -464,11 +482,11 @@ class SemiImplicit final : public Formulation<Dim> {
         vw = w.m > transfer::empty_node_mass ? Vec<Dim>(w.mv / w.m) : Vec<Dim>::Zero();
         // M_w = n_I sum S rho_w V (eq. 50); forces n_I (...) (eqs. 56-57); the soil takes (1 - n_I).
         w.m = e.n * e.w_raw;
-        w.f = e.n * (w.f + e.pgrad);  // body force and pressure, both x n_I
-        s.f += (1.0 - e.n) * e.pgrad;
+        w.f = e.n * w.f;  // body force x n_I (eq. 56)
       } else if (w.m > transfer::empty_node_mass) {
         vw = w.mv / w.m;
       }
+      add_pressure_force(i, ijk, p_node_, s.f, w.f);  // -G p^t: eqs. 55, 57 in the strong form
       const bool has_w = w.m > transfer::empty_node_mass;
       const Vec<Dim> vs = has_s ? Vec<Dim>(s.mv / s.m) : Vec<Dim>::Zero();
       soil_.vL[i] = vs;
@@ -487,17 +505,19 @@ class SemiImplicit final : public Formulation<Dim> {
   ///   dt sum_J L_IJ dp_J = -(D^s v_s* + D^w v_w*)_I
   ///   D^s_IK = sum_sp (1 - n) V S_I grad S_K,  D^w_IK = sum_wp n V S_I grad S_K   (eqs. 62-63)
   ///   L_IJ = sum_p V c_p grad S_I . grad S_J,  c = (1 - n)/rho_s (soil points) + n/rho_w (water)
-  /// (eq. 61 with c inside the quadrature: L symmetric, CHOLMOD). The corrections (6) use the
-  /// transpose of D, the weak pressure gradient. The exact projection D M^-1 D^T in place of L
-  /// was tried: stable with B-splines, but its two-cell stencil decouples the pressure
-  /// (Terzaghi on GIMP 30 % RMS error instead of 0.09 %) — docs/verification.md.
+  /// (eq. 61 with c inside the quadrature: L symmetric, CHOLMOD). The pressure forces of (3)-(4)
+  /// and the corrections (6) use G = D read as (velocity node, pressure node): the strong
+  /// gradient of eq. 67-68. The exact projection D M^-1 D^T in place of L was tried (with the
+  /// weak gradient D^T): stable, but its two-cell stencil decouples the pressure (Terzaghi on
+  /// GIMP 30 % RMS error instead of 0.09 %).
   /// Prescribed nodes: grid faces the water drains through (p = 0, or the face's value) and the
-  /// free surface (support less than kFullSupport full); dp_D = p_D - p^t(x_D), with p^t at the
-  /// node from the linear projection of the points' pressures (exact for a hydrostatic field).
-  bool solve_pressure(const ParticleSet<Dim>& ps, const ParticleSet<Dim>& ws, double dt) {
+  /// free surface (free_surface()); dp_D = p_D - p^t(x_D), with p^t at the node from the linear
+  /// projection of the points' pressures (exact for a hydrostatic field).
+  void assemble_pressure(const ParticleSet<Dim>& ps, const ParticleSet<Dim>& ws) {
     const auto& sdw = double_point_ ? sdw_ : sd_;
     const auto& wsched = double_point_ ? wschedule_ : schedule_;
     linear_.fit(grid_, box_, wsched, sdw, ws.x, [&](int p) { return ws.V[p]; }, [&](int p) { return ws.p[p]; });
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { p_node_[i] = linear_.at_node(i); });
     poisson_.clear(grid_, box_);
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       std::fill_n(D_solid_.data() + i * KD, KD, Vec<Dim>::Zero());
@@ -511,10 +531,11 @@ class SemiImplicit final : public Formulation<Dim> {
         if (ijk[a] == 0 && face_drained_[2 * a]) face = 2 * a;
         if (ijk[a] == nn[a] - 1 && face_drained_[2 * a + 1]) face = 2 * a + 1;
       }
-      const bool surface = node_[i].volume < kFullSupport * support_[i];
+      double p_surface = 0.0;
+      const bool surface = face < 0 && free_surface(i, ijk, p_surface);
       if (face >= 0 || surface) {
-        const double p_bar = face >= 0 ? face_pressure_[face] : 0.0;
-        poisson_.prescribe(i, p_bar - linear_.at_node(i));
+        const double p_bar = face >= 0 ? face_pressure_[face] : p_surface;
+        poisson_.prescribe(i, p_bar - p_node_[i]);
       } else {
         poisson_.set_unknown(i);
       }
@@ -536,6 +557,10 @@ class SemiImplicit final : public Formulation<Dim> {
         scatter_divergence(sdw_[p], ws.n[p] * ws.V[p], D_water_);
         add_laplacian(sdw_[p], ws.V[p] * ws.n[p] / rho_w_points_[ws.material[p]]);
       });
+  }
+
+  /// (5c) right-hand side -(1/dt)(D^s v_s* + D^w v_w*) and the CHOLMOD solve.
+  bool solve_pressure(double dt) {
     const double inv_dt = 1.0 / dt;
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto& ijk) {
       if (poisson_.role(i) == Poisson::inactive) return;
@@ -551,6 +576,61 @@ class SemiImplicit final : public Formulation<Dim> {
       poisson_.rhs(i) = -inv_dt * div;
     });
     return poisson_.solve(grid_, box_);
+  }
+
+  /// (5b) Whether node i (with water) is on the free surface, and its prescribed pressure p_D.
+  /// Linear/GIMP: its support is less than kFullSupport full; p_D = 0 (the node lies on the
+  /// surface). B-splines: the water inside its support stops more than kSurfaceCut cells short of
+  /// the support's end along some axis (a grid face is not a cut: the support is clipped to the
+  /// grid). Such a node lies up to about a cell inside or outside the surface, so p_D = 0 there
+  /// would move the surface; p_D is instead the value at the node of the linear fit of the points'
+  /// pressures shifted to vanish on the surface x_s (the water's extent along the axis of the
+  /// largest cut): p_D = -dp/dx_a (x_s - x_Ia). Exact for a hydrostatic or any linear field.
+  bool free_surface(std::size_t i, const std::array<int, Dim>& ijk, double& p_D) const {
+    const NodeExtra& e = node_[i];
+    p_D = 0.0;
+    double cut = 0.0, x_s = 0.0;
+    int axis = -1;
+    for (int a = 0; a < Dim; ++a) {
+      const auto [s_lo, s_hi] = support_range(a, ijk[a]);
+      if (s_hi - e.hi[a] > cut) cut = s_hi - e.hi[a], x_s = e.hi[a], axis = a;
+      if (e.lo[a] - s_lo > cut) cut = e.lo[a] - s_lo, x_s = e.lo[a], axis = a;
+    }
+    if (cut <= kSurfaceCut * grid_.h()) return false;
+    p_D = -linear_.gradient_at_node(grid_, i)[axis] * (x_s - grid_.axis(axis).node_x[ijk[axis]]);
+    return true;
+  }
+  /// Support of basis j along axis a, clipped to the grid [m]: B-splines [t_j, t_{j+q+1}] on the
+  /// clamped knot vector; linear and GIMP the hat's [x_j - h, x_j + h] (GIMP's wider reach of
+  /// l_p belongs to the points' domains, which e.lo / e.hi already include).
+  std::pair<double, double> support_range(int a, int j) const {
+    const auto& ax = grid_.axis(a);
+    if constexpr (Shape::bspline) {
+      const int q = Shape::degree;
+      auto knot = [&](int t) { return ax.origin + std::clamp(t - q, 0, ax.cells) * ax.h; };
+      return {knot(j), knot(j + q + 1)};
+    } else {
+      return {std::max(ax.node_x[j] - ax.h, ax.origin), std::min(ax.node_x[j] + ax.h, ax.origin + ax.cells * ax.h)};
+    }
+  }
+
+  /// f_s -= sum_J G^s_KJ q_J, f_w -= sum_J G^w_KJ q_J at node K: the pressure force of a nodal
+  /// field q in the strong form of eqs. 67-68, G^s_KJ = sum_sp (1 - n) V S_K grad S_J =
+  /// D^s_KJ (equal-order pressure and velocity shapes: G is D read with the roles of I and J
+  /// swapped), i.e. f_s = -sum_sp (1 - n) V S_K grad q(x_sp).
+  void add_pressure_force(std::size_t k, const std::array<int, Dim>& ijk, const std::vector<double>& q, Vec<Dim>& fs,
+                          Vec<Dim>& fw) const {
+    const Vec<Dim>* Ds_k = D_solid_.data() + k * KD;
+    const Vec<Dim>* Dw_k = D_water_.data() + k * KD;
+    Vec<Dim> gs = Vec<Dim>::Zero(), gw = Vec<Dim>::Zero();
+    for (int kk = 0; kk < KD; ++kk) {
+      if (!inside(ijk, DSt::offset(kk))) continue;
+      const double qJ = q[k + d_steps_[kk]];
+      gs += qJ * Ds_k[kk];
+      gw += qJ * Dw_k[kk];
+    }
+    fs -= gs;
+    fw -= gw;
   }
 
   /// Whether node ijk + d lies in this step's active box (rows outside it hold stale values).
@@ -597,24 +677,16 @@ class SemiImplicit final : public Formulation<Dim> {
     }
   }
 
-  /// (6) eqs. 64-68 with the weak gradient (the transpose of D):
-  ///   M_sK (v_sK^{t+1} - v_sK*) = dt sum_I D^s_IK dp_I,   M_wK (v_wK^{t+1} - v_wK*) = dt sum_I D^w_IK dp_I
-  /// (= dt sum_p (1 - n) V dp(x_p) grad S_K: the weak form of -(1 - n) grad dp); then the boundary
-  /// conditions on v^{t+1} (step 6d erratum: on v^{t+1}, not v*).
+  /// (6) eqs. 64-68 with the strong gradient G (eqs. 67-68):
+  ///   M_sK (v_sK^{t+1} - v_sK*) = -dt sum_J G^s_KJ dp_J,   M_wK (v_wK^{t+1} - v_wK*) = -dt sum_J G^w_KJ dp_J
+  /// (= -dt sum_p (1 - n) V S_K grad dp(x_p)), then the boundary conditions on v^{t+1} (step 6d
+  /// erratum: on v^{t+1}, not v*). The velocity change at a node is a weighted mean of grad dp
+  /// over the points it touches, however little mass it has.
   void correct(const ParticleSet<Dim>&, const ParticleSet<Dim>&, double dt) {
     const auto& dp = poisson_.dp();
     grid_.parallel_for_each_node(box_, [&](std::size_t k, const auto& ijk) {
       Vec<Dim> js = Vec<Dim>::Zero(), jw = Vec<Dim>::Zero();
-      for (int ee = 0; ee < KD; ++ee) {  // rows I = K - e hold D_IK at offset +e
-        const auto e = DSt::offset(ee);
-        std::array<int, Dim> d;
-        for (int a = 0; a < Dim; ++a) d[a] = -e[a];
-        if (!inside(ijk, d)) continue;
-        const std::size_t I = k - d_steps_[ee];
-        if (dp[I] == 0.0) continue;
-        js += dp[I] * D_solid_[I * KD + ee];
-        jw += dp[I] * D_water_[I * KD + ee];
-      }
+      add_pressure_force(k, ijk, dp, js, jw);
       const double Ms = soil_.acc[k].m, Mw = water_.acc[k].m;
       if (Ms > transfer::empty_node_mass) soil_.v[k] += (dt / Ms) * js;
       if (Mw > transfer::empty_node_mass) water_.v[k] += (dt / Mw) * jw;
@@ -817,6 +889,7 @@ class SemiImplicit final : public Formulation<Dim> {
   NodeFields<Dim> soil_, water_;
   std::vector<NodeExtra> node_;
   std::vector<double> support_;  // per node: integral of its basis function over the grid
+  std::vector<double> p_node_;   // Pa, per node: p^t from the linear projection of the points' pressures
   Poisson poisson_;
   std::vector<Vec<Dim>> D_solid_, D_water_;  // per node: row I of D^s, D^w over the D stencil
   std::array<long, KD> d_steps_{};

@@ -76,6 +76,15 @@ class NodeProjection {
   bool has(std::size_t i) const { return blocks_[i * NB] > 0.0; }
   /// The fitted value at node i (a_I[0]: the basis is centred at the node).
   double at_node(std::size_t i) const { return has(i) ? blocks_[i * NB + NH] : 0.0; }
+  /// The fitted gradient at node i [unit of f per m]: a_I[1..Dim] / h (zero for Order 0, for a
+  /// node that fell back to Order 0, and for a node without weight).
+  Vec<Dim> gradient_at_node(const Grid<Dim>& g, std::size_t i) const {
+    Vec<Dim> grad = Vec<Dim>::Zero();
+    if constexpr (Order == 1)
+      if (has(i))
+        for (int a = 0; a < Dim; ++a) grad[a] = blocks_[i * NB + NH + 1 + a] / g.h();
+    return grad;
+  }
   /// The projected field at a point with shape data sd at x (only nodes with weight count).
   double at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x) const {
     double value = 0.0;

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "scene/scene.hpp"
+#include "support/indicators.hpp"
 #include "support/run_helpers.hpp"
 
 namespace {
@@ -70,4 +71,129 @@ TEST(SemiImplicitHardCases, OneAndTwoThreadsGiveIdenticalResults) {
   ASSERT_EQ(p1.size(), p2.size());
   ASSERT_GT(p1.size(), 2048u);
   for (std::size_t k = 0; k < p1.size(); ++k) ASSERT_EQ(p1[k], p2[k]) << "point " << k;
+}
+
+namespace {
+
+struct FieldStats {
+  std::string status;
+  double p_min = 1e300, p_max = -1e300, v_max = 0.0, checker = 0.0;
+  int frames = 0;
+};
+
+/// Runs a scene and measures every frame of the soil points: extremes of p, largest speed, and the
+/// largest checkerboard indicator of p (radius in m).
+FieldStats run_field(const json& s, const std::string& name, double radius) {
+  const std::string run = swmpm::testing::run_scene(s, name, 1);
+  FieldStats r;
+  r.status = swmpm::testing::load_json(run + "/run.json")["status"];
+  for (const auto& e : swmpm::scene::read_pvd(run + "/output/results.pvd")) {
+    if (e.group != "solid") continue;
+    const auto f = swmpm::scene::read_vtu(run + "/output/" + e.file);
+    const auto& p = f.get("pore_pressure", e.file).values;
+    const auto& v = f.get("velocity", e.file).values;
+    for (std::size_t a = 0; a < f.size(); ++a) {
+      r.p_min = std::min(r.p_min, p[a]);
+      r.p_max = std::max(r.p_max, p[a]);
+      r.v_max = std::max(r.v_max, std::hypot(v[3 * a], v[3 * a + 1]));
+    }
+    r.checker = std::max(r.checker, swmpm::testing::checkerboard_indicator(f, p, radius));
+    ++r.frames;
+  }
+  std::printf("%s: %s, %d frames, p in [%.0f, %.0f] Pa, max |v_s| %.3g m/s, checkerboard %.4f\n", name.c_str(),
+              r.status.c_str(), r.frames, r.p_min, r.p_max, r.v_max, r.checker);
+  return r;
+}
+
+/// A saturated block 2 m wide and 1 m high (E = 1 MPa, k = 1e-4 m/s) standing free on a roller,
+/// impermeable base: its top and both sides are free, drained surfaces between the nodes. Gravity
+/// ramped over 0.1 s, dt auto (soil CFL 0.5), 0.5 s: it spreads and rings.
+json soft_block(const std::string& formulation, const std::string& shape) {
+  json s = json::parse(R"json({
+    "name": "si-block", "dimension": 2, "formulation": "semi-implicit-single-point",
+    "gravity": [0.0, -9.81], "gravity_ramp": 0.1,
+    "grid": { "cell_size": 0.1, "min": [0.0, 0.0], "max": [3.0, 1.5], "shape_function": "bspline2" },
+    "materials": [
+      { "name": "soft", "model": "linear-elastic", "grain_density": 2650.0, "porosity": 0.4,
+        "youngs_modulus": 1.0e6, "poisson_ratio": 0.3, "hydraulic_conductivity": 1.0e-4 },
+      { "name": "water", "model": "fluid", "density": 1000.0, "bulk_modulus": 2.2e9 } ],
+    "bodies": [ { "name": "block", "geometry": { "type": "box", "min": [0.5, 0.0], "max": [2.5, 1.0] },
+                  "solid": "soft", "fluid": "water", "particles_per_cell": 2 } ],
+    "boundaries": [ { "on": "y_min", "solid": "roller", "fluid": "impermeable" } ],
+    "time": { "end": 0.5, "dt": "auto", "cfl": 0.5 },
+    "solver": { "stabilisation": { "pressure": "mfvp-linear" } },
+    "output": { "interval": 0.05 }
+  })json");
+  s["formulation"] = formulation;
+  s["grid"]["shape_function"] = shape;
+  return s;
+}
+
+/// The slope of B3 (seed 001, Yuan et al. 2023 geometry: 10 m high at 45 degrees on a 10 m
+/// foundation, cells 1 m, 2x2 points per cell), Mohr-Coulomb with SRF 2, k = 1e-3 m/s, gravity
+/// ramped over 0.5 s, dt 0.002 s, to 0.5 s: a diagonal free surface cuts the supports at every
+/// angle. (The lead's reproduction of the GIMP light-node instability.)
+json slope(const std::string& formulation, const std::string& shape) {
+  json s = json::parse(R"json({
+    "name": "si-slope", "dimension": 2, "formulation": "semi-implicit-double-point",
+    "gravity": [0.0, -9.81], "gravity_ramp": 0.5,
+    "grid": { "cell_size": 1.0, "min": [0.0, 0.0], "max": [45.0, 22.0], "shape_function": "gimp" },
+    "materials": [
+      { "name": "soil", "model": "mohr-coulomb", "grain_density": 2500.0, "porosity": 0.4,
+        "youngs_modulus": 1.0e8, "poisson_ratio": 0.3, "cohesion": 20000.0, "friction_angle": 30.0,
+        "dilation_angle": 0.0, "strength_reduction_factor": 2.0, "hydraulic_conductivity": 0.001 },
+      { "name": "water", "model": "fluid", "density": 1000.0, "bulk_modulus": 2.2e9 } ],
+    "bodies": [ { "name": "slope", "geometry": { "type": "slope", "foundation_depth": 10.0, "height": 10.0,
+                  "angle": 45.0, "toe_length": 25.0, "crest_length": 10.0 },
+                  "solid": "soil", "fluid": "water", "particles_per_cell": 2 } ],
+    "boundaries": [ { "on": "x_min", "solid": "roller", "fluid": "impermeable" },
+                    { "on": "x_max", "solid": "roller", "fluid": "impermeable" },
+                    { "on": "y_min", "solid": "fixed", "fluid": "impermeable" } ],
+    "time": { "end": 0.5, "dt": 0.002 },
+    "solver": { "stabilisation": { "pressure": "mfvp-linear" } },
+    "output": { "interval": 0.1 }
+  })json");
+  s["formulation"] = formulation;
+  s["grid"]["shape_function"] = shape;
+  return s;
+}
+
+}  // namespace
+
+// The free-standing block with B-splines (before the fix: diverged in the first steps). Bounds:
+// p below the total overburden rho_sat g H = 19.5 kPa and above -5 % of it (the free surface
+// holds p = 0), speeds of a ringing elastic spread (< 0.5 m/s), a smooth p field.
+TEST(SemiImplicitHardCases, FreeStandingBlockWithBsplinesStaysBoundedAndSmooth) {
+  const double bound = ((1 - 0.4) * 2650.0 + 0.4 * 1000.0) * 9.81 * 1.0;
+  for (const std::string f : {"semi-implicit-single-point", "semi-implicit-double-point"}) {
+    const FieldStats r = run_field(soft_block(f, "bspline2"), "si-block-b2-" + f, 0.15);
+    EXPECT_EQ(r.status, "completed") << f;
+    EXPECT_EQ(r.frames, 11) << f;
+    EXPECT_LT(r.p_max, bound) << f;
+    EXPECT_GT(r.p_min, -0.05 * bound) << f;
+    EXPECT_LT(r.v_max, 0.5) << f;
+    EXPECT_LT(r.checker, 0.05) << f;
+  }
+}
+
+// The B3 slope under the gravity ramp, both variants with bspline2 and double-point with GIMP
+// (on db60629 both exploded within ~10 steps). Bounds: p below the total overburden at the base,
+// rho_sat g 20 m = 373 kPa (incompressible constituents: the ramp is carried undrained at first),
+// a smooth p field, and bspline2 p >= -2 % of it (measured min 0, max 297 kPa, checkerboard
+// 0.002). GIMP completes but is not clean: a suction of -75 kPa (-20 %) grows from 0.3 s one cell
+// below the toe surface while the slope moves (0.7 m/s): bounded here at -25 %, an open problem
+// (docs/verification.md).
+TEST(SemiImplicitHardCases, SlopeUnderGravityStaysBounded) {
+  const double bound = ((1 - 0.4) * 2500.0 + 0.4 * 1000.0) * 9.81 * 20.0;
+  struct Case {
+    std::string formulation, shape;
+  };
+  for (const Case& c : {Case{"semi-implicit-double-point", "bspline2"}, Case{"semi-implicit-single-point", "bspline2"},
+                        Case{"semi-implicit-double-point", "gimp"}}) {
+    const FieldStats r = run_field(slope(c.formulation, c.shape), "si-slope-" + c.shape + "-" + c.formulation, 1.5);
+    EXPECT_EQ(r.status, "completed") << c.shape << " " << c.formulation;
+    EXPECT_LT(r.p_max, bound) << c.shape << " " << c.formulation;
+    EXPECT_GT(r.p_min, (c.shape == "gimp" ? -0.25 : -0.02) * bound) << c.shape << " " << c.formulation;
+    EXPECT_LT(r.checker, 0.05) << c.shape << " " << c.formulation;
+  }
 }
