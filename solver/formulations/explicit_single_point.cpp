@@ -211,10 +211,14 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     });
     return power;
   }
-  void set_initialisation(State<Dim>&, const scene::Initialisation* phase) override {
+  void set_initialisation(State<Dim>& st, const scene::Initialisation* phase) override {
     set_plastic(materials_, phase == nullptr || phase->plasticity);
     damping_ = phase_damping(phase, scene_damping_);
     for (auto& pf : pore_) pf.k = phase && phase->hydraulic_conductivity ? *phase->hydraulic_conductivity : pf.k_scene;
+    // The phase's seepage velocities belong to its permeability: the pore water restarts at the
+    // skeleton's velocity and the drag brings it to the scene's Darcy flow (as semi_implicit.cpp).
+    if (phase) fast_drainage_ = phase->hydraulic_conductivity.has_value();
+    else if (fast_drainage_) st.solid.v_f = st.solid.v, fast_drainage_ = false;
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
 
@@ -556,6 +560,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   GridBoundary<Dim> bcs_solid_, bcs_fluid_;
   ParticleLoads<Dim> loads_;
   double flip_, damping_, scene_damping_;
+  bool fast_drainage_ = false;  // an initialisation phase with its own permeability is running
   bool smoothing_;
   int mfvp_order_;  // -1 none, 0 constant, 1 linear, 2 quadratic basis Q
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;

@@ -330,13 +330,25 @@ class SemiImplicit final : public Formulation<Dim> {
     damping_ = phase_damping(phase, scene_damping_);
     if (scene_perm_.empty()) scene_perm_ = perm_;
     perm_ = scene_perm_;
-    if (phase && phase->hydraulic_conductivity)
+    if (phase && phase->hydraulic_conductivity) {
       for (auto& pm : perm_) {
         pm.k0 = *phase->hydraulic_conductivity;
         pm.law = Permeability::Law::constant;
       }
+      fast_drainage_ = true;
+    }
+    if (phase == nullptr && fast_drainage_) {
+      // The phase's seepage velocities belong to its permeability, not the scene's (the pressure
+      // field of steady seepage does not depend on k, the flow is proportional to it): the pore
+      // water restarts at the soil's velocity and the drag brings it to the scene's Darcy flow
+      // within k / (n g).
+      if (!partner_.empty()) restart_water_with_soil(st);
+      if (!double_point_) st.solid.v_f = st.solid.v;
+      fast_drainage_ = false;
+    }
     tie_ = double_point_ && phase && phase->tie_water;
-    if (tie_ && partner_.empty()) partner_ = coincident_soil_points(st);
+    if ((tie_ || (double_point_ && phase && phase->hydraulic_conductivity)) && partner_.empty())
+      partner_ = coincident_soil_points(st);
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
 
@@ -844,6 +856,17 @@ class SemiImplicit final : public Formulation<Dim> {
     }
   }
 
+  /// End of an initialisation phase with its own permeability (double-point): each water point with
+  /// a coincident soil point takes that point's velocity.
+  void restart_water_with_soil(State<Dim>& st) const {
+    ParticleSet<Dim>& ws = st.fluid;
+    const ParticleSet<Dim>& ps = st.solid;
+    for (std::size_t p = 0; p < ws.size(); ++p) {
+      const std::int64_t sid = partner_[ws.id[p]];
+      if (sid >= 0) ws.v[p] = ps.v[st.index_of_id[sid]];
+    }
+  }
+
   /// (8h)-(8i) double-point: nodal porosity from the updated soil points (soil-mass weighted,
   /// divided by M_s: erratum of step 8h), interpolated at the water points (1 where no soil), and
   /// their volume V = m / (n rho_w) (eq. 36: n V = n0 V0). Shape data of the start of the step.
@@ -881,6 +904,7 @@ class SemiImplicit final : public Formulation<Dim> {
   std::vector<Permeability> perm_;          // per solid material (the initialisation phase's while it runs)
   std::vector<Permeability> scene_perm_;    // per solid material, as the scene gives it
   bool tie_ = false;                        // initialisation: water points follow their soil points
+  bool fast_drainage_ = false;              // initialisation with its own permeability is running
   std::vector<std::int64_t> partner_;       // per water-point id: the coincident soil point's id (-1: none)
   std::vector<int> fluid_of_material_;      // per solid material: its pore water's material
   std::vector<double> rho_w_points_;        // per fluid material (double-point water points)
