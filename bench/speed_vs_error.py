@@ -10,7 +10,9 @@ Error metrics:
   --reference CSV --monitor NAME.QUANTITY
                 the relative L2 error of `swmpm postprocess RUN compare` (any scene).
   --metric terzaghi
-                Terzaghi consolidation (examples/terzaghi, explicit-single-point): RMS over all
+                Terzaghi consolidation (examples/terzaghi, explicit-single-point; or B1,
+                examples/terzaghi-semi-implicit, either semi-implicit variant, against the series
+                with incompressible water and p0 = q): RMS over all
                 particles of p/p0 - the series at the end time (z = depth of the particle's initial
                 position below the top, Tv = c_v t / H^2, c_v = k / (gamma_w (1/E_oed + n/K_f)));
                 p0, E, nu, n, k, K_f, rho_w, H are read from the scene.
@@ -146,9 +148,14 @@ def saturated_column(scene):
     fluid = next(m for m in scene["materials"] if m["model"] == "fluid")
     body = scene["bodies"][0]
     geo = body["geometry"]
+    # The semi-implicit formulations treat the water as incompressible (B1): K_f -> infinity, and
+    # the undrained response to the load q is p = q at once (no initial pore pressure given).
+    incompressible = scene["formulation"].startswith("semi-implicit")
+    q = -scene["loads"][0]["value"][1]
     return dict(E=solid["youngs_modulus"], nu=solid["poisson_ratio"], n=solid["porosity"],
-                k=solid["hydraulic_conductivity"], rho_w=fluid["density"], K_f=fluid["bulk_modulus"],
-                p0=body["initial"]["pore_pressure"], q=-scene["loads"][0]["value"][1],
+                k=solid["hydraulic_conductivity"], rho_w=fluid["density"],
+                K_f=math.inf if incompressible else fluid["bulk_modulus"],
+                p0=body["initial"].get("pore_pressure", q) if not incompressible else q, q=q,
                 H=geo["max"][1] - geo["min"][1], y_min=geo["min"][1], end=scene["time"]["end"])
 
 
