@@ -291,11 +291,23 @@ def main():
                     help="error measure (ignored with --reference): see the module docstring")
     ap.add_argument("--reference", default="", help="reference CSV for `postprocess compare`")
     ap.add_argument("--monitor", default="", help="NAME.QUANTITY compared with --reference")
-    ap.add_argument("--table", required=True, help="Markdown output")
+    ap.add_argument("--combine", default="", metavar="TABLE=LABEL,...",
+                    help="only draw --chart from tables this script wrote, one series per label and shape")
+    ap.add_argument("--table", default="", help="Markdown output (required unless --combine)")
     ap.add_argument("--chart", required=True, help="PNG output")
     ap.add_argument("--title", default="Speed against error: one series per shape function (all cell sizes and ppc)")
     ap.add_argument("--work", default="", help="folder for the runs (default: a temporary one)")
     a = ap.parse_args()
+    if a.combine:
+        rows = []
+        for item in a.combine.split(","):
+            path, label = item.split("=")
+            rows += read_table(path, label)
+        chart(rows, a.chart, "RMS of p/p0 vs series" if a.metric == "terzaghi" else a.metric, a.title)
+        print(f"chart: {a.chart} ({len(rows)} runs)")
+        return
+    if not a.table:
+        sys.exit("--table is required (unless --combine)")
     if bool(a.reference) != bool(a.monitor):
         sys.exit("--reference and --monitor go together")
     with open(a.scene) as f:
