@@ -38,36 +38,15 @@ def scene(dim, n, extent, steps, formulation="dry", shape="gimp"):
     E, rho = 1.0e7, 2000.0
     c = ((E / rho)) ** 0.5
     dt = 0.4 * h / c
-    if formulation.startswith("semi-implicit"):
-        # Incompressible constituents: dt from the soil's own P-wave (the pressure is implicit).
-        nu, n_por, rho_s, rho_w = 0.3, 0.3, 2650.0, 1000.0
-        M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
-        rho_sat = (1 - n_por) * rho_s + n_por * rho_w
-        dt = 0.4 * h / (M / rho_sat) ** 0.5
-        return {
-            "name": f"bench-si-{dim}d-{n}",
-            "dimension": dim,
-            "formulation": formulation,
-            "gravity": g,
-            "grid": {"cell_size": h, "min": lo, "max": hi_grid, "shape_function": shape},
-            "materials": [{"name": "soil", "model": "linear-elastic", "grain_density": rho_s, "porosity": n_por,
-                           "youngs_modulus": E, "poisson_ratio": nu, "hydraulic_conductivity": 1e-3},
-                          {"name": "water", "model": "fluid", "density": rho_w, "bulk_modulus": 2.2e9}],
-            "bodies": [{"name": "box", "geometry": {"type": "box", "min": lo, "max": hi_body},
-                        "solid": "soil", "fluid": "water", "particles_per_cell": 2,
-                        "initial": {"stress": "geostatic", "k0": 0.5, "pore_pressure": "hydrostatic"}}],
-            "boundaries": [{"on": f, "solid": "roller", "fluid": "impermeable"} for f in faces]
-                          + [{"on": "y_min", "solid": "fixed", "fluid": "impermeable"}],
-            "time": {"end": steps * dt * (1 - 1e-9), "dt": dt},
-            "output": {"interval": 0.0},
-        }
-    if formulation == "explicit-single-point":
+    if formulation != "dry":
         nu, n_por, Kf, rho_s, rho_w = 0.3, 0.3, 2.2e9, 2650.0, 1000.0
         M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
         rho_sat = (1 - n_por) * rho_s + n_por * rho_w
-        dt = 0.4 * h / ((M + Kf / n_por) / rho_sat) ** 0.5
+        # explicit: the undrained P-wave; semi-implicit: the soil's own (the pressure is implicit)
+        explicit = formulation == "explicit-single-point"
+        dt = 0.4 * h / ((M + Kf / n_por if explicit else M) / rho_sat) ** 0.5
         return {
-            "name": f"bench-esp-{dim}d-{n}",
+            "name": f"bench-{'esp' if explicit else 'si'}-{dim}d-{n}",
             "dimension": dim,
             "formulation": formulation,
             "gravity": g,

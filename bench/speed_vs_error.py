@@ -10,7 +10,9 @@ Error metrics:
   --reference CSV --monitor NAME.QUANTITY
                 the relative L2 error of `swmpm postprocess RUN compare` (any scene).
   --metric terzaghi
-                Terzaghi consolidation (examples/terzaghi, explicit-single-point): RMS over all
+                Terzaghi consolidation (examples/terzaghi, explicit-single-point; or B1,
+                examples/terzaghi-semi-implicit, either semi-implicit variant, against the series
+                with incompressible water and p0 = q): RMS over all
                 particles of p/p0 - the series at the end time (z = depth of the particle's initial
                 position below the top, Tv = c_v t / H^2, c_v = k / (gamma_w (1/E_oed + n/K_f)));
                 p0, E, nu, n, k, K_f, rho_w, H are read from the scene.
@@ -146,9 +148,14 @@ def saturated_column(scene):
     fluid = next(m for m in scene["materials"] if m["model"] == "fluid")
     body = scene["bodies"][0]
     geo = body["geometry"]
+    # The semi-implicit formulations treat the water as incompressible (B1): K_f -> infinity, and
+    # the undrained response to the load q is p = q at once (no initial pore pressure given).
+    incompressible = scene["formulation"].startswith("semi-implicit")
+    q = -scene["loads"][0]["value"][1]
     return dict(E=solid["youngs_modulus"], nu=solid["poisson_ratio"], n=solid["porosity"],
-                k=solid["hydraulic_conductivity"], rho_w=fluid["density"], K_f=fluid["bulk_modulus"],
-                p0=body["initial"]["pore_pressure"], q=-scene["loads"][0]["value"][1],
+                k=solid["hydraulic_conductivity"], rho_w=fluid["density"],
+                K_f=math.inf if incompressible else fluid["bulk_modulus"],
+                p0=body["initial"].get("pore_pressure", q) if not incompressible else q, q=q,
                 H=geo["max"][1] - geo["min"][1], y_min=geo["min"][1], end=scene["time"]["end"])
 
 
@@ -284,11 +291,23 @@ def main():
                     help="error measure (ignored with --reference): see the module docstring")
     ap.add_argument("--reference", default="", help="reference CSV for `postprocess compare`")
     ap.add_argument("--monitor", default="", help="NAME.QUANTITY compared with --reference")
-    ap.add_argument("--table", required=True, help="Markdown output")
+    ap.add_argument("--combine", default="", metavar="TABLE=LABEL,...",
+                    help="only draw --chart from tables this script wrote, one series per label and shape")
+    ap.add_argument("--table", default="", help="Markdown output (required unless --combine)")
     ap.add_argument("--chart", required=True, help="PNG output")
     ap.add_argument("--title", default="Speed against error: one series per shape function (all cell sizes and ppc)")
     ap.add_argument("--work", default="", help="folder for the runs (default: a temporary one)")
     a = ap.parse_args()
+    if a.combine:
+        rows = []
+        for item in a.combine.split(","):
+            path, label = item.split("=")
+            rows += read_table(path, label)
+        chart(rows, a.chart, "RMS of p/p0 vs series" if a.metric == "terzaghi" else a.metric, a.title)
+        print(f"chart: {a.chart} ({len(rows)} runs)")
+        return
+    if not a.table:
+        sys.exit("--table is required (unless --combine)")
     if bool(a.reference) != bool(a.monitor):
         sys.exit("--reference and --monitor go together")
     with open(a.scene) as f:

@@ -6,7 +6,9 @@
 // through the stripe schedule (race-free, fixed order), so assembly builds no triplets and sorts
 // nothing. The CSC matrix of the unknown nodes (lower triangle) is filled from the stencils by a
 // gather map; its pattern and CHOLMOD's symbolic analysis are rebuilt only when the set of unknown
-// nodes changes, and reused otherwise (only the numeric factorisation runs each step).
+// nodes changes, and reused otherwise. The numeric factorisation is reused too, as the
+// preconditioner of conjugate gradients on later steps' L (which changes only as the points move):
+// refactorised when CG needs more than kMaxIterations or the factor is kMaxAge steps old.
 #pragma once
 
 #include <Eigen/CholmodSupport>
@@ -124,9 +126,8 @@ class PressurePoisson {
     if (!analysed_) {
       solver_.analyzePattern(A_);
       analysed_ = true;
+      factored_ = false;
     }
-    solver_.factorize(A_);
-    if (solver_.info() != Eigen::Success) return false;
     b_.resize(n);
     for (int j = 0; j < n; ++j) {
       const std::size_t I = static_cast<std::size_t>(unknowns_[j]);
@@ -139,8 +140,21 @@ class PressurePoisson {
       }
       b_[j] = r;
     }
-    x_ = solver_.solve(b_);
-    if (solver_.info() != Eigen::Success) return false;
+    // The factor of an earlier step's L (same pattern: L changes only as the points move) is a
+    // preconditioner for conjugate gradients on this step's L; refactorise when CG needs more than
+    // kMaxIterations or the factor is kMaxAge steps old. Every decision depends on the numbers
+    // only, so the result is the same for any thread count.
+    if (factored_ && age_ < kMaxAge && preconditioned_cg()) {
+      ++age_;
+    } else {
+      solver_.factorize(A_);
+      if (solver_.info() != Eigen::Success) return false;
+      factored_ = true;
+      age_ = 0;
+      ++factorisations_;
+      x_ = solver_.solve(b_);
+      if (solver_.info() != Eigen::Success) return false;
+    }
     for (int j = 0; j < n; ++j) dp_[unknowns_[j]] = x_[j];
     return true;
   }
@@ -149,9 +163,41 @@ class PressurePoisson {
   double dp(std::size_t i) const { return dp_[i]; }
   const std::vector<double>& dp() const { return dp_; }
   int unknown_count() const { return static_cast<int>(unknowns_.size()); }
+  long factorisations() const { return factorisations_; }
+  long cg_iterations() const { return cg_iterations_; }
   long pattern_builds() const { return pattern_builds_; }
 
  private:
+  static constexpr int kMaxIterations = 10;
+  static constexpr int kMaxAge = 50;          // steps
+  static constexpr double kTolerance = 1e-10;  // relative residual |b - L x| / |b|
+
+  /// x_ = L^-1 b_ by conjugate gradients preconditioned with the stored (older) factor, from
+  /// x = 0. Returns false (x_ undefined) when it needs more than kMaxIterations.
+  bool preconditioned_cg() {
+    const Eigen::Index n = b_.size();
+    const double b_norm = b_.norm();
+    x_.setZero(n);
+    if (b_norm == 0.0) return true;
+    r_ = b_;
+    z_ = solver_.solve(r_);
+    d_ = z_;
+    double rz = r_.dot(z_);
+    for (int it = 1; it <= kMaxIterations; ++it) {
+      q_.noalias() = A_.selfadjointView<Eigen::Lower>() * d_;
+      const double alpha = rz / d_.dot(q_);
+      x_ += alpha * d_;
+      r_ -= alpha * q_;
+      ++cg_iterations_;
+      if (r_.norm() <= kTolerance * b_norm) return true;
+      z_ = solver_.solve(r_);
+      const double rz_new = r_.dot(z_);
+      d_ = z_ + (rz_new / rz) * d_;
+      rz = rz_new;
+    }
+    return false;
+  }
+
   /// Lower-triangle CSC pattern of the unknown nodes, with the stencil slot of every entry.
   void build_pattern() {
     const int n = static_cast<int>(unknowns_.size());
@@ -200,10 +246,11 @@ class PressurePoisson {
   std::vector<int> eq_, unknowns_, pattern_nodes_;
   std::vector<std::size_t> gather_;  // per CSC entry: its slot in stencil_
   Eigen::SparseMatrix<double> A_;
-  Eigen::VectorXd b_, x_;
+  Eigen::VectorXd b_, x_, r_, z_, d_, q_;  // right-hand side, solution, CG work vectors
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
-  bool analysed_ = false;
-  long pattern_builds_ = 0;
+  bool analysed_ = false, factored_ = false;
+  int age_ = 0;  // steps since the last factorisation
+  long pattern_builds_ = 0, factorisations_ = 0, cg_iterations_ = 0;
 };
 
 }  // namespace swmpm

@@ -555,19 +555,17 @@ class SemiImplicit final : public Formulation<Dim> {
     // Soil points: D^s; single-point also D^w from the same points.
     schedule_.run([&](int p) {
       const double V = ps.V[p], n = ps.n[p];
-      scatter_divergence(sd_[p], (1.0 - n) * V, D_solid_);
-      if (!double_point_) scatter_divergence(sd_[p], n * V, D_water_);
-      {
-        const double rho_s = ps.m[p] / ((1.0 - n) * V);
-        double c = (1.0 - n) / rho_s;
-        if (!double_point_) c += n / perm_[ps.material[p]].rho_w;
-        add_laplacian(sd_[p], V * c);
+      const double rho_s = ps.m[p] / ((1.0 - n) * V);
+      if (double_point_) {
+        scatter_operators<true, false>(sd_[p], (1.0 - n) * V, 0.0, V * (1.0 - n) / rho_s);
+      } else {
+        const double c = (1.0 - n) / rho_s + n / perm_[ps.material[p]].rho_w;
+        scatter_operators<true, true>(sd_[p], (1.0 - n) * V, n * V, V * c);
       }
     });
     if (double_point_)
       wschedule_.run([&](int p) {
-        scatter_divergence(sdw_[p], ws.n[p] * ws.V[p], D_water_);
-        add_laplacian(sdw_[p], ws.V[p] * ws.n[p] / rho_w_points_[ws.material[p]]);
+        scatter_operators<false, true>(sdw_[p], 0.0, ws.n[p] * ws.V[p], ws.V[p] * ws.n[p] / rho_w_points_[ws.material[p]]);
       });
   }
 
@@ -652,25 +650,12 @@ class SemiImplicit final : public Formulation<Dim> {
     return true;
   }
 
-  /// L_IJ += c grad S_I . grad S_J (eq. 61 with c inside the quadrature).
-  void add_laplacian(const shape::ShapeData<Dim, S>& sd, double c) {
-    std::array<std::size_t, NP> node;
-    std::array<Vec<Dim>, NP> grad;
-    int a = 0;
-    shape::for_each_node(grid_, sd, [&](std::size_t i, double, const Vec<Dim>& dN) {
-      node[a] = i;
-      grad[a] = dN;
-      ++a;
-    });
-    for (int r = 0; r < NP; ++r) {
-      double* row = poisson_.row(node[r]);
-      const Vec<Dim> g = c * grad[r];
-      for (int k = 0; k < NP; ++k) row[lap_slot_[r][k]] += g.dot(grad[k]);
-    }
-  }
-
-  /// D_IK += c S_I grad S_K for one point's node pairs (through the stripe schedule).
-  void scatter_divergence(const shape::ShapeData<Dim, S>& sd, double c, std::vector<Vec<Dim>>& D) const {
+  /// One point's share of the operators of (5a), through the stripe schedule:
+  ///   D^s_IK += cs S_I grad S_K,  D^w_IK += cw S_I grad S_K   (eqs. 62-63; cs = (1 - n) V, cw = n V)
+  ///   L_IJ += cl grad S_I . grad S_J                            (eq. 61, cl = c V inside the quadrature)
+  /// The node pairs are visited once for all three (a phase with c = 0 is skipped at compile time).
+  template <bool kSoil, bool kWater>
+  void scatter_operators(const shape::ShapeData<Dim, S>& sd, double cs, double cw, double cl) {
     std::array<std::size_t, NP> node;
     std::array<double, NP> N;
     std::array<Vec<Dim>, NP> grad;
@@ -682,10 +667,17 @@ class SemiImplicit final : public Formulation<Dim> {
       ++a;
     });
     for (int r = 0; r < NP; ++r) {
+      double* lrow = poisson_.row(node[r]);
+      const Vec<Dim> g = cl * grad[r];
+      for (int k = 0; k < NP; ++k) lrow[lap_slot_[r][k]] += g.dot(grad[k]);
       if (N[r] == 0.0) continue;
-      Vec<Dim>* row = D.data() + node[r] * KD;
-      const double cN = c * N[r];
-      for (int k = 0; k < NP; ++k) row[pair_slot_[r][k]] += cN * grad[k];
+      Vec<Dim>* srow = D_solid_.data() + node[r] * KD;
+      Vec<Dim>* wrow = D_water_.data() + node[r] * KD;
+      const double sN = cs * N[r], wN = cw * N[r];
+      for (int k = 0; k < NP; ++k) {
+        if constexpr (kSoil) srow[pair_slot_[r][k]] += sN * grad[k];
+        if constexpr (kWater) wrow[pair_slot_[r][k]] += wN * grad[k];
+      }
     }
   }
 
