@@ -14,7 +14,8 @@
 //   (4) G2P of both phases (FLIP/PIC blend), positions move with the solid; (5) MUSL remap
 //   (6) strain rates of both phases; cell-average (mass-weighted) volumetric rates (eqs. 26-27)
 //   (8) F, V, porosity (eq. 4 integrated: (1 - n) V is constant), fluid mass n rho_f V — done
-//       before (7) because material models take F_{n+1} on entry
+//       before (7) because material models take F_{n+1} on entry; then F-bar (transfer/fbar.hpp)
+//       when solver.stabilisation.fbar is set (after the strain smoothing, which it smooths again)
 //   (7) effective stress (material model), pore pressure rate (eq. 9 with the n div v_f erratum)
 //       through the node-based multi-field variational step with Q = [1], linear or quadratic
 //       (eqs. 33-34)
@@ -27,6 +28,7 @@
 #include "solver/formulations/registry.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/transfer/fbar.hpp"
 #include "solver/transfer/transfer.hpp"
 
 namespace swmpm {
@@ -56,13 +58,12 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
         smoothing_(s.solver.stabilisation.strain_smoothing),
         mfvp_order_(mfvp_order(s.solver.stabilisation.pressure)),
         materials_(make_materials<Dim>(s)),
-        material_particles_(group_by_material(state.solid, s.materials.size())) {
+        material_particles_(group_by_material(state.solid, s.materials.size())),
+        fbar_(s, grid_) {
     const auto& pressure = s.solver.stabilisation.pressure;
     if (pressure == "node-remap")
       throw std::runtime_error("solver.stabilisation.pressure: \"node-remap\" belongs to the semi-implicit "
                                "formulations (available here: none, mfvp-constant, mfvp-linear, mfvp-quadratic)");
-    if (s.solver.stabilisation.fbar != "none")
-      throw std::runtime_error("solver.stabilisation.fbar: F-bar is not implemented yet in this version");
     if (!state.solid.two_phase())
       throw std::runtime_error("explicit-single-point needs saturated particles (pore_pressure, porosity, fluid_mass "
                                "in particles/solid.vtu): run swmpm preprocess with a body that has a solid and a fluid");
@@ -143,6 +144,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     bad = update_volumes(ps, dt);                                                        // (8)
     if (bad >= 0) st.health.report(bad, "solid", "volume ratio J <= 0 or porosity outside (0, 1)");
     lap("volume and porosity");
+    if (fbar_.apply(grid_, box_, schedule_, sd_, dt, st, materials_, material_particles_)) lap("f-bar");  // (8b), after smoothing
 
     // (7) after (8): the material contract wants F_{n+1} on entry (Hencky reads it).
     for (std::size_t k = 0; k < materials_.size(); ++k) {
@@ -564,6 +566,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::vector<FaceForce<Dim, S>> face_forces_;
   StripeSchedule schedule_;
   Reorder<Dim> reorder_;
+  FBar<Dim, S> fbar_;
   static constexpr long reorder_interval = 10;  // steps
 };
 
