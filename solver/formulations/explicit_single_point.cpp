@@ -410,7 +410,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   double pressure_rate(const ParticleSet<Dim>& ps, int p) const {
     if (ps.fluid_material[p] < 0) return 0.0;
     const double np = ps.n[p], K_f = pore_[ps.material[p]].K_f;
-    return -(K_f / np) * ((1.0 - np) * ps.L[p].trace() + np * div_f_[p]);
+    return -(K_f / np) * ((1.0 - np) * div_s_[p] + np * div_f_[p]);
   }
 
   /// Number of basis functions of order `Order` in Dim dimensions: 1, 1 + Dim, (Dim+1)(Dim+2)/2.
@@ -530,8 +530,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   long update_volumes(ParticleSet<Dim>& ps, double dt) {
     const long n = static_cast<long>(ps.size());
     long bad = transfer::no_particle;
+    div_s_.resize(ps.size());
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
+      div_s_[p] = ps.L[p].trace();  // eq. 9 takes the (smoothed) rate of (6): F-bar acts on the skeleton only
       Mat3 dF = Mat3::Identity();
       dF.template topLeftCorner<Dim, Dim>() = transfer::deformation_increment<Dim>(ps.L[p], dt);
       ps.F[p] = dF * ps.F[p];
@@ -559,6 +561,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::vector<double> drag_;                         // per node
   std::vector<double> mfvp_;                         // per node: packed H_I, then rhs / coefficients a_I
   std::vector<double> div_f_;                        // per particle
+  std::vector<double> div_s_;                        // per particle: tr L_s of (6), before F-bar
   std::vector<std::size_t> cell_;                    // per particle
   std::vector<std::array<double, 4>> cell_sum_;      // per cell: sum m div v_s, sum m_s, sum m_f div v_f, sum m_f
   NodeBox<Dim> box_;
