@@ -14,8 +14,12 @@ from each run.json.
   stabilisation (cell-average strain smoothing + node-based MFVP, linear basis); dt = 0.4 of the
   undrained P-wave limit.
 
+--fbar none,standard,modified,modified:1.5 (dry): one row per F-bar variant (solver.stabilisation.fbar,
+  and fbar_patch after the colon), with --shape gimp|bspline2 and --material linear-elastic|hencky.
+
 Usage: bench/dry_box.py [--swmpm build/app/swmpm] [--sizes 10k,100k,1M,3d] [--threads 1,2]
                         [--steps 100] [--formulation dry] [--out bench/results/dry-box-<date>.md]
+                        [--fbar none,...] [--shape gimp] [--material linear-elastic]
 Memory per particle = (peak RSS of the run - peak RSS of a 1-particle run) / particles.
 """
 import argparse, datetime, json, os, platform, subprocess, sys, tempfile
@@ -27,7 +31,7 @@ SIZES = {  # name: (dimension, cells per side along x/y(/z), extent)
     "3d-100k": (3, 30, 3.0),
 }
 
-def scene(dim, n, extent, steps, formulation="dry", shape="gimp"):
+def scene(dim, n, extent, steps, formulation="dry", fbar="none", shape="gimp", material="linear-elastic"):
     h = extent / n
     lo = [0.0] * dim
     hi_grid = [extent + 2 * h] * dim
@@ -62,13 +66,13 @@ def scene(dim, n, extent, steps, formulation="dry", shape="gimp"):
             "time": {"end": steps * dt * (1 - 1e-9), "dt": dt},
             "output": {"interval": 0.0},
         }
-    return {
+    sc = {
         "name": f"bench-{dim}d-{n}",
         "dimension": dim,
         "formulation": "dry",
         "gravity": g,
         "grid": {"cell_size": h, "min": lo, "max": hi_grid, "shape_function": shape},
-        "materials": [{"name": "m", "model": "linear-elastic", "density": rho,
+        "materials": [{"name": "m", "model": material, "density": rho,
                         "youngs_modulus": E, "poisson_ratio": 0.3}],
         "bodies": [{"name": "box", "geometry": {"type": "box", "min": lo, "max": hi_body},
                      "solid": "m", "particles_per_cell": 2}],
@@ -76,6 +80,12 @@ def scene(dim, n, extent, steps, formulation="dry", shape="gimp"):
         "time": {"end": steps * dt * (1 - 1e-9), "dt": dt},
         "output": {"interval": 0.0},
     }
+    if fbar != "none":
+        mode, _, ratio = fbar.partition(":")
+        sc["solver"] = {"stabilisation": {"fbar": mode}}
+        if ratio:
+            sc["solver"]["stabilisation"]["fbar_patch"] = float(ratio)
+    return sc
 
 def run(swmpm, sc, threads, work):
     path = os.path.join(work, sc["name"] + ".json")
@@ -96,7 +106,9 @@ def main():
     ap.add_argument("--out", default="")
     ap.add_argument("--formulation", default="dry", choices=["dry", "explicit-single-point", "semi-implicit-single-point",
                                                              "semi-implicit-double-point"])
+    ap.add_argument("--fbar", default="none", help="comma list: none, standard, modified, modified:RATIO (dry)")
     ap.add_argument("--shape", default="gimp", choices=["linear", "gimp", "bspline2", "bspline3"])
+    ap.add_argument("--material", default="linear-elastic")
     ap.add_argument("--repeat", type=int, default=3,
                     help="runs per case; the table gives the fastest (timing noise on shared machines is additive) and the median")
     a = ap.parse_args()
@@ -104,17 +116,22 @@ def main():
     base = run(a.swmpm, scene(2, 2, 0.2, 2, a.formulation, a.shape), 1, work)["peak_memory_bytes"]
     rows = []
     for name in a.sizes.split(","):
-        dim, n, ext = SIZES[name]
+      dim, n, ext = SIZES[name]
+      for fb in a.fbar.split(","):
         for t in [int(x) for x in a.threads.split(",")]:
-            runs = [run(a.swmpm, scene(dim, n, ext, a.steps, a.formulation, a.shape), t, work) for _ in range(a.repeat)]
+            runs = [run(a.swmpm, scene(dim, n, ext, a.steps, a.formulation, fb, a.shape, a.material), t, work)
+                    for _ in range(a.repeat)]
             runs.sort(key=lambda r: r["loop_us_per_particle_step"])
             r = runs[0]
             median = runs[len(runs) // 2]["loop_us_per_particle_step"]
             parts = r["particles"]["solid"] + r["particles"].get("fluid", 0)
             mem = (max(x["peak_memory_bytes"] for x in runs) - base) / parts
-            rows.append((name, dim, parts, t, r["steps"], r["loop_us_per_particle_step"], median, mem, r["stage_seconds"]))
-            print(f"{name:8s} {dim}D {parts:>8d} particles, {t} thread(s): {r['loop_us_per_particle_step']:.4f} us/particle-step "
-                  f"(median of {a.repeat}: {median:.4f}), {mem:.0f} B/particle", flush=True)
+            rows.append((name + ("" if fb == "none" else f", fbar {fb}"), dim, parts, t, r["steps"],
+                         r["loop_us_per_particle_step"], median, mem, r["stage_seconds"]))
+            # The F-bar stage alone: its wall time per particle-step, fastest of the repeats.
+            fbar_us = min(x["stage_seconds"].get("f-bar", 0.0) for x in runs) / (parts * r["steps"]) * 1e6
+            print(f"{name:8s} fbar {fb:12s} {dim}D {parts:>8d} particles, {t} thread(s): {r['loop_us_per_particle_step']:.4f} us/particle-step "
+                  f"(median of {a.repeat}: {median:.4f}; f-bar stage {fbar_us:.4f}), {mem:.0f} B/particle", flush=True)
     cpu = "unknown"
     try:
         for line in open("/proc/cpuinfo"):
@@ -125,7 +142,7 @@ def main():
     title = "Dry MPM" if a.formulation == "dry" else a.formulation
     lines = [f"# {title} speed — {datetime.date.today()}", "",
              f"Machine: {cpu}, {os.cpu_count()} cores, {platform.platform()}.",
-             f"Scene: {a.shape}, linear-elastic box under gravity ({a.formulation}), 2x2(x2) particles per cell, MUSL, {a.steps} steps. "
+             f"Scene: {a.shape}, {a.material} box under gravity ({a.formulation}), 2x2(x2) particles per cell, MUSL, {a.steps} steps. "
              f"Time per particle-step is the time loop's (run.json loop_us_per_particle_step); best and median of {a.repeat} runs.", "",
              "| case | dim | particles | threads | steps | us per particle-step, best | median | bytes per particle |",
              "|---|---|---|---|---|---|---|---|"]

@@ -301,10 +301,20 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
     throw std::runtime_error(scene_path + ": /solver/stabilisation/strain_smoothing: cell-average strain smoothing "
                              "belongs to explicit-single-point (seed 000); the semi-implicit formulations use the "
                              "pressure projection (and F-bar); remove the key or set it to false");
+  const auto stab = solver.contains("stabilisation") && solver["stabilisation"].is_object() ? solver["stabilisation"]
+                                                                                               : nlohmann::json::object();
+  if (stab.contains("fbar_patch") && s.solver.stabilisation.fbar != "modified")
+    throw std::runtime_error(scene_path + ": /solver/stabilisation/fbar_patch: the patch size is read only by the "
+                             "modified F-bar (fbar is \"" + s.solver.stabilisation.fbar +
+                             "\"); remove the key or set fbar to \"modified\"");
   if (s.formulation == scene::Formulation::dry) {
-    if (solver.contains("stabilisation"))
-      throw std::runtime_error(scene_path + ": /solver/stabilisation: the dry formulation has no pore pressure to stabilise "
-                               "and F-bar is not implemented yet in this version; remove the key");
+    // F-bar (fbar, fbar_patch) acts on the skeleton of every formulation; the rest is pore pressure
+    // (pressure) or explicit-single-point's cell smoothing (strain_smoothing).
+    for (const char* key : {"strain_smoothing", "pressure"})
+      if (stab.contains(key))
+        throw std::runtime_error(scene_path + ": /solver/stabilisation/" + key + ": the dry formulation has no pore "
+                                 "pressure to stabilise and no strain smoothing (F-bar is solver.stabilisation.fbar); "
+                                 "remove the key");
     bool plastic = false;  // mohr-coulomb and nor-sand read solver.kinematics (nor-sand: finite-strain only)
     for (const auto& m : s.materials)
       plastic = plastic || m.model == scene::MaterialModel::mohr_coulomb || m.model == scene::MaterialModel::nor_sand;

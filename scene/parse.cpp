@@ -1076,7 +1076,13 @@ const Table& stabilisation_table() {
            .meaning = "Pore-pressure stabilisation; default by formulation: `mfvp-linear` "
                       "(explicit-single-point and semi-implicit), `none` otherwise."},
           {.name = "fbar", .type = Type::choice, .def = "none", .values = {"none", "standard", "modified"},
-           .meaning = "F-bar treatment of volumetric locking."},
+           .meaning = "F-bar treatment of volumetric locking (seed 001 §4.4.2, every formulation): `standard` "
+                      "scales ΔF by the node-wise average of det ΔF (eqs. 79-80); `modified` also averages the "
+                      "elastic J^e over fixed patches (eqs. 81-83)."},
+          {.name = "fbar_patch", .range = closed(1, 4), .unit = "-",
+           .meaning = "Modified F-bar: patch side h_patch / h of the fixed lattice of squares (cubes) from "
+                      "`grid.min` over which J^e is averaged (1: cell-wise; read only with `fbar: modified`).",
+           .default_text = "1 (linear, gimp), 1.5 (bspline2, bspline3)"},
       }};
   return t;
 }
@@ -1284,6 +1290,8 @@ class SceneParser {
     parse_solver(top.ok("solver") ? top.get("solver") : json::object(), top.at("solver"));
     if (top.ok("formulation")) resolve_formulation(top.str("formulation"), top.at("formulation"));
     if (top.ok("initialisation")) parse_initialisation(top.get("initialisation"), top.at("initialisation"), top);
+    if (s_.solver.stabilisation.fbar_patch == 0.0)
+      s_.solver.stabilisation.fbar_patch = default_fbar_patch(s_.grid.shape_function);
     if (s_.solver.stabilisation.pressure.empty()) {
       // The seeds' choices: seed 000 runs strain smoothing with the multi-field variational
       // pressure (basis not stated; the linear one is the smallest that keeps A5 bounded with FLIP
@@ -2070,6 +2078,7 @@ class SceneParser {
     sv.stabilisation.strain_smoothing = st.ok("strain_smoothing") ? st.get("strain_smoothing").get<bool>() : true;
     sv.stabilisation.pressure = st.str("pressure", "");  // "": the formulation's default (default_pressure_stabilisation)
     sv.stabilisation.fbar = st.str("fbar", "none");
+    sv.stabilisation.fbar_patch = st.num("fbar_patch", 0.0);  // 0: by shape function, resolved in parse()
   }
 
   void parse_initialisation(const json& j, const std::string& path, const Obj& top) {
@@ -2417,7 +2426,8 @@ nlohmann::json to_json(const Scene& s) {
                  {"stabilisation",
                   {{"strain_smoothing", sv.stabilisation.strain_smoothing},
                    {"pressure", sv.stabilisation.pressure},
-                   {"fbar", sv.stabilisation.fbar}}}};
+                   {"fbar", sv.stabilisation.fbar},
+                   {"fbar_patch", sv.stabilisation.fbar_patch}}}};
   return j;
 }
 

@@ -79,6 +79,10 @@ std::string to_string(ShapeFunction f) {
   return "?";
 }
 
+double default_fbar_patch(ShapeFunction f) {
+  return f == ShapeFunction::bspline2 || f == ShapeFunction::bspline3 ? 1.5 : 1.0;
+}
+
 std::string to_string(MaterialModel m) {
   switch (m) {
     case MaterialModel::linear_elastic: return "linear-elastic";

@@ -161,7 +161,12 @@ struct Stabilisation {
   bool strain_smoothing = true;
   std::string pressure = "none";  // none | mfvp-constant | mfvp-linear | mfvp-quadratic | node-remap
   std::string fbar = "none";      // none | standard | modified
+  double fbar_patch = 0.0;        // -, h_patch / h of the modified F-bar (0: default_fbar_patch)
 };
+
+/// h_patch / h of the modified F-bar when the scene gives none (seed 001 §4.4.2 and step (9)(f)):
+/// cell-wise (1) for linear and GIMP, patch-wise 1.5 for the B-splines.
+double default_fbar_patch(ShapeFunction f);
 
 struct Solver {
   double flip = 0.99;            // FLIP fraction of the FLIP/PIC blend (1 = pure FLIP)

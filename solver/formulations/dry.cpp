@@ -7,7 +7,7 @@
 //   (4) grid: vL_i = (mv)_i / m_i, local damping, v_i = vL_i + dt f_i / m_i, BCs on v_i
 //   (5) G2P: v_p (FLIP/PIC blend), x_p += dt sum N v_i
 //   (6) MUSL: remap momentum with the new v_p, v_i = (mv)_i / m_i, BCs   (fused with (5): one pass)
-//   (7) L_p = sum v_i (x) grad N_ip; F, V
+//   (7) L_p = sum v_i (x) grad N_ip; F, V; then F-bar when solver.stabilisation.fbar is set (transfer/fbar.hpp)
 //   (8) stress update per material
 #include <omp.h>
 
@@ -17,6 +17,7 @@
 #include "solver/formulations/registry.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/transfer/fbar.hpp"
 #include "solver/transfer/transfer.hpp"
 
 namespace swmpm {
@@ -35,7 +36,8 @@ class Dry final : public Formulation<Dim> {
         damping_(s.solver.damping),
         scene_damping_(s.solver.damping),
         materials_(make_materials<Dim>(s)),
-        material_particles_(group_by_material(state.solid, s.materials.size())) {
+        material_particles_(group_by_material(state.solid, s.materials.size())),
+        fbar_(s, grid_) {
     nodes_.resize(grid_.num_nodes());
   }
 
@@ -81,6 +83,7 @@ class Dry final : public Formulation<Dim> {
     bad = transfer::gather_velocity_gradient(grid_, nodes_, sd_, dt, ps);               // (7)
     if (bad >= 0) st.health.report(bad, "solid", "volume ratio J = det F <= 0 (or not finite)");
     lap("velocity gradient");
+    if (fbar_.apply(grid_, box_, schedule_, sd_, dt, st, materials_, material_particles_)) lap("f-bar");  // (7b)
 
     for (std::size_t k = 0; k < materials_.size(); ++k) {                               // (8)
       if (material_particles_[k].empty()) continue;
@@ -165,6 +168,7 @@ class Dry final : public Formulation<Dim> {
   StripeSchedule schedule_;
   Reorder<Dim> reorder_;
   std::vector<FaceForce<Dim, S>> face_forces_;
+  FBar<Dim, S> fbar_;
   static constexpr long reorder_interval = 10;  // steps
 };
 

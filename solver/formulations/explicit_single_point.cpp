@@ -14,7 +14,8 @@
 //   (4) G2P of both phases (FLIP/PIC blend), positions move with the solid; (5) MUSL remap
 //   (6) strain rates of both phases; cell-average (mass-weighted) volumetric rates (eqs. 26-27)
 //   (8) F, V, porosity (eq. 4 integrated: (1 - n) V is constant), fluid mass n rho_f V — done
-//       before (7) because material models take F_{n+1} on entry
+//       before (7) because material models take F_{n+1} on entry; then F-bar (transfer/fbar.hpp)
+//       when solver.stabilisation.fbar is set (after the strain smoothing, which it smooths again)
 //   (7) effective stress (material model), pore pressure rate (eq. 9 with the n div v_f erratum)
 //       through the node-based multi-field variational step with Q = [1], linear or quadratic
 //       (eqs. 33-34)
@@ -27,6 +28,7 @@
 #include "solver/formulations/registry.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/transfer/fbar.hpp"
 #include "solver/transfer/transfer.hpp"
 
 namespace swmpm {
@@ -58,13 +60,12 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
         smoothing_(s.solver.stabilisation.strain_smoothing),
         mfvp_order_(mfvp_order(s.solver.stabilisation.pressure)),
         materials_(make_materials<Dim>(s)),
-        material_particles_(group_by_material(state.solid, s.materials.size())) {
+        material_particles_(group_by_material(state.solid, s.materials.size())),
+        fbar_(s, grid_) {
     const auto& pressure = s.solver.stabilisation.pressure;
     if (pressure == "node-remap")
       throw std::runtime_error("solver.stabilisation.pressure: \"node-remap\" belongs to the semi-implicit "
                                "formulations (available here: none, mfvp-constant, mfvp-linear, mfvp-quadratic)");
-    if (s.solver.stabilisation.fbar != "none")
-      throw std::runtime_error("solver.stabilisation.fbar: F-bar is not implemented yet in this version");
     if (!state.solid.two_phase())
       throw std::runtime_error("explicit-single-point needs saturated particles (pore_pressure, porosity, fluid_mass "
                                "in particles/solid.vtu): run swmpm preprocess with a body that has a solid and a fluid");
@@ -146,6 +147,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     bad = update_volumes(ps, dt);                                                        // (8)
     if (bad >= 0) st.health.report(bad, "solid", "volume ratio J <= 0 or porosity outside (0, 1)");
     lap("volume and porosity");
+    if (fbar_.apply(grid_, box_, schedule_, sd_, dt, st, materials_, material_particles_)) lap("f-bar");  // (8b), after smoothing
 
     // (7) after (8): the material contract wants F_{n+1} on entry (Hencky reads it).
     for (std::size_t k = 0; k < materials_.size(); ++k) {
@@ -420,7 +422,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   double pressure_rate(const ParticleSet<Dim>& ps, int p) const {
     if (ps.fluid_material[p] < 0) return 0.0;
     const double np = ps.n[p], K_f = pore_[ps.material[p]].K_f;
-    return -(K_f / np) * ((1.0 - np) * ps.L[p].trace() + np * div_f_[p]);
+    return -(K_f / np) * ((1.0 - np) * div_s_[p] + np * div_f_[p]);
   }
 
   /// Number of basis functions of order `Order` in Dim dimensions: 1, 1 + Dim, (Dim+1)(Dim+2)/2.
@@ -540,8 +542,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   long update_volumes(ParticleSet<Dim>& ps, double dt) {
     const long n = static_cast<long>(ps.size());
     long bad = transfer::no_particle;
+    div_s_.resize(ps.size());
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
+      div_s_[p] = ps.L[p].trace();  // eq. 9 takes the (smoothed) rate of (6): F-bar acts on the skeleton only
       Mat3 dF = Mat3::Identity();
       dF.template topLeftCorner<Dim, Dim>() = transfer::deformation_increment<Dim>(ps.L[p], dt);
       ps.F[p] = dF * ps.F[p];
@@ -570,6 +574,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::vector<double> drag_;                         // per node
   std::vector<double> mfvp_;                         // per node: packed H_I, then rhs / coefficients a_I
   std::vector<double> div_f_;                        // per particle
+  std::vector<double> div_s_;                        // per particle: tr L_s of (6), before F-bar
   std::vector<std::size_t> cell_;                    // per particle
   std::vector<std::array<double, 4>> cell_sum_;      // per cell: sum m div v_s, sum m_s, sum m_f div v_f, sum m_f
   NodeBox<Dim> box_;
@@ -577,6 +582,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::vector<FaceForce<Dim, S>> face_forces_;
   StripeSchedule schedule_;
   Reorder<Dim> reorder_;
+  FBar<Dim, S> fbar_;
   static constexpr long reorder_interval = 10;  // steps
 };
 

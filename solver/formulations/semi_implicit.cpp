@@ -39,6 +39,7 @@
 #include "solver/formulations/registry.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/transfer/fbar.hpp"
 #include "solver/transfer/projection.hpp"
 #include "solver/transfer/transfer.hpp"
 
@@ -97,7 +98,8 @@ class SemiImplicit final : public Formulation<Dim> {
         scene_damping_(s.solver.damping),
         materials_(make_materials<Dim>(s)),
         material_particles_(group_by_material(state.solid, s.materials.size())),
-        poisson_(grid_) {
+        poisson_(grid_),
+        fbar_(s, grid_) {
     const auto& st = s.solver.stabilisation;
     if (st.pressure == "node-remap") remap_ = Remap::node;
     else if (st.pressure == "mfvp-linear") remap_ = Remap::linear;
@@ -105,8 +107,6 @@ class SemiImplicit final : public Formulation<Dim> {
     else
       throw std::runtime_error("solver.stabilisation.pressure: \"" + st.pressure + "\" is not available in " + name() +
                                " (available: node-remap, mfvp-linear, none)");
-    if (st.fbar != "none")
-      throw std::runtime_error("solver.stabilisation.fbar: F-bar is not implemented yet in this version");
     if (!state.solid.two_phase())
       throw std::runtime_error(name() + " needs saturated soil points (porosity in particles/solid.vtu): run swmpm "
                                "preprocess with a body that has a solid and a fluid");
@@ -250,6 +250,7 @@ class SemiImplicit final : public Formulation<Dim> {
 
     bad = update_soil(ps, dt);                                                              // (8)
     if (bad >= 0) st.health.report(bad, "solid", "volume ratio J <= 0 or porosity outside (0, 1)");
+    fbar_.apply(grid_, box_, schedule_, sd_, dt, st, materials_, material_particles_);  // (9)(b)-(g), transfer/fbar.hpp
     if (double_point_) {
       bad = update_water_points(ps, ws);
       if (bad >= 0) st.health.report(bad, "fluid", "water-point porosity outside (0, 1]");
@@ -917,6 +918,7 @@ class SemiImplicit final : public Formulation<Dim> {
   std::vector<FaceForce<Dim, S>> face_forces_;
   StripeSchedule schedule_, wschedule_;
   Reorder<Dim> reorder_, wreorder_;
+  FBar<Dim, S> fbar_;
   static constexpr long reorder_interval = 10;  // steps
 };
 

@@ -6,9 +6,11 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "solver/materials/hencky_trial.hpp"
 #include "solver/materials/material.hpp"
 #include "solver/materials/mohr_coulomb.hpp"
 #include "solver/materials/nor_sand.hpp"
+#include "solver/transfer/transfer.hpp"
 
 namespace swmpm {
 namespace {
@@ -21,9 +23,12 @@ class LinearElastic final : public MaterialModel<Dim> {
   std::string name() const override { return "linear-elastic"; }
   double p_wave_modulus() const override { return e_.p_wave(); }
 
+  /// Under the modified F-bar σ_n is first shifted by K ps.ev_shift[p] 1 (the hypoelastic b̄_e:
+  /// the elastic volumetric strain tr σ / 3K moves by the shift).
   long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double dt) const override {
     return update_each(ps, ids, [&](int p) {
       Sym& s = ps.sigma[p];
+      if (!ps.ev_shift.empty()) s.template head<3>().array() += e_.K * ps.ev_shift[p];
       if constexpr (Dim == 2) {
         // Plane strain written out: D in-plane, W = [[0, w], [-w, 0]], w = (L_xy - L_yx)/2.
         const auto& L = ps.L[p];
@@ -47,6 +52,12 @@ class LinearElastic final : public MaterialModel<Dim> {
     });
   }
 
+  /// ε_v^e = tr σ_n / 3K.
+  void elastic_volumetric_strain(const ParticleSet<Dim>& ps, std::span<const int> ids, double,
+                                 std::span<double> ev) const override {
+    for_each_id(ids, [&](int p) { ev[p] = hencky::volumetric_strain(e_, ps.sigma[p], 1.0); });
+  }
+
   /// Complementary energy 1/2 sigma : C^-1 : sigma V (exact for linear elasticity).
   double strain_energy(const ParticleSet<Dim>& ps, int p) const override {
     const Sym& s = ps.sigma[p];
@@ -67,7 +78,21 @@ class Hencky final : public MaterialModel<Dim> {
   std::string name() const override { return "hencky"; }
   double p_wave_modulus() const override { return e_.p_wave(); }
 
-  long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double) const override {
+  /// Total form from F_{n+1}; under the modified F-bar (ps.ev_shift allocated) the incremental form
+  /// of materials/hencky_trial.hpp instead: b_e,n rebuilt from σ_n and shifted, b_tr = ΔF b̄_e,n ΔFᵀ.
+  /// Without a shift the two agree to round-off (an elastic model has b_e,n = F_n F_nᵀ), but the
+  /// incremental one keeps an initial stress and the shifts of earlier steps.
+  long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double dt) const override {
+    if (!ps.ev_shift.empty())
+      return update_each(ps, ids, [&](int p) {
+        const MatD<Dim> dF = transfer::deformation_increment<Dim>(ps.L[p], dt);
+        const double J = ps.F[p].determinant();
+        if (!(J > 0.0)) return false;
+        hencky::Trial<Dim> t;
+        if (!hencky::trial<Dim>(e_, ps.sigma[p], J / dF.determinant(), dF, ps.ev_shift[p], t)) return false;
+        ps.sigma[p] = hencky::cauchy<Dim>(t, hencky::stress(e_, t.eps), J);
+        return true;
+      });
     return update_each(ps, ids, [&](int p) {
       const Mat3& F = ps.F[p];
       const double J = F.determinant();
@@ -81,6 +106,15 @@ class Hencky final : public MaterialModel<Dim> {
       const Mat3& Q = eig.eigenvectors();
       ps.sigma[p] = to_voigt(Q * (tau / J).asDiagonal() * Q.transpose());
       return true;
+    });
+  }
+
+  /// ε_v^e = tr τ_n / 3K, τ_n = J_n σ_n (= ln J_n in the total form, where b_e,n = F_n F_nᵀ).
+  void elastic_volumetric_strain(const ParticleSet<Dim>& ps, std::span<const int> ids, double dt,
+                                 std::span<double> ev) const override {
+    for_each_id(ids, [&](int p) {
+      const double Jn = ps.F[p].determinant() / transfer::deformation_jacobian<Dim>(ps.L[p], dt);
+      ev[p] = hencky::volumetric_strain(e_, ps.sigma[p], Jn);
     });
   }
 

@@ -7,6 +7,12 @@
 // model must not allocate. It returns the smallest particle index whose update failed (J <= 0,
 // non-finite stress), or -1. A model with internal variables (needs_material_state) keeps them in
 // ps.state[p] and updates them in the same call.
+//
+// Modified F-bar (seed 001 eqs. 81-83, solver/transfer/fbar.hpp): every model reports the elastic
+// logarithmic volumetric strain of its b_e,n (elastic_volumetric_strain), and, when
+// ps.ev_shift is allocated, update_stress replaces b_e,n by b̄_e,n = exp(2 ps.ev_shift[p] / 3) b_e,n
+// before the trial — eq. 82 with (J̄^e / J^e)^{2/3} = exp(2/3 ln(J̄^e / J^e)). Hypoelastic and
+// small-strain models realise the same shift on the stress: σ_n + K ps.ev_shift[p] 1.
 #pragma once
 
 #include <algorithm>
@@ -39,6 +45,13 @@ class MaterialModel {
   /// stress and leaves its internal variables alone (the initialisation phase, seed 001 App. B.4).
   /// Called between steps, never per particle; elastic models ignore it.
   virtual void set_plastic(bool on) { (void)on; }
+  /// Modified F-bar, step (9)(e): ε_v^e = ln J^e = ln √det b_e,n [-] of each particle p of `ids`
+  /// at the start of the step, into ev[p] (ev is indexed by particle): the b_e,n this model
+  /// rebuilds from σ_n in update_stress (finite strain: with J_n = det F / det ΔF(L, dt), so it
+  /// may be called before or after the F-bar stage rewrites F and L consistently; small strain
+  /// and hypoelastic: tr σ_n / 3K). One call per material per step; no allocation.
+  virtual void elastic_volumetric_strain(const ParticleSet<Dim>& ps, std::span<const int> ids, double dt,
+                                         std::span<double> ev) const = 0;
   /// Stored elastic energy of particle p [J, or J/m in plane strain].
   virtual double strain_energy(const ParticleSet<Dim>& ps, int p) const = 0;
   /// Names of state quantities the model reports beside the stress (Nor-Sand: specific_volume,
@@ -64,6 +77,14 @@ long update_each(ParticleSet<Dim>& ps, std::span<const int> ids, Fn&& fn) {
     if (!fn(p) || !ps.sigma[p].allFinite()) bad = std::min(bad, static_cast<long>(p));
   }
   return bad == none ? -1 : bad;
+}
+
+/// fn(p) for each particle p of `ids`, in parallel (each call writes only particle p's data).
+template <class Fn>
+void for_each_id(std::span<const int> ids, Fn&& fn) {
+  const long n = static_cast<long>(ids.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+  for (long k = 0; k < n; ++k) fn(ids[k]);
 }
 
 /// Builds the model a scene material names. Throws std::runtime_error for models this build's

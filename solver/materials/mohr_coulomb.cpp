@@ -17,6 +17,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "solver/materials/hencky_trial.hpp"
 #include "solver/materials/spectral.hpp"
 #include "solver/transfer/transfer.hpp"
 
@@ -29,7 +30,6 @@ using spectral::eig2;
 using spectral::Eig2;
 using spectral::rebuild;
 using spectral::Sym2;
-using spectral::sym_exp;
 
 template <int Dim>
 class MohrCoulomb final : public MaterialModel<Dim> {
@@ -41,6 +41,16 @@ class MohrCoulomb final : public MaterialModel<Dim> {
 
   long update_stress(ParticleSet<Dim>& ps, std::span<const int> ids, double dt) const override {
     return update_each(ps, ids, [&](int p) { return finite_ ? finite_strain(ps, p, dt) : small_strain(ps, p, dt); });
+  }
+
+  /// ε_v^e of b_e,n: tr τ_n / 3K (finite strain, τ_n = J_n σ_n) or tr σ_n / 3K (small strain).
+  void elastic_volumetric_strain(const ParticleSet<Dim>& ps, std::span<const int> ids, double dt,
+                                 std::span<double> ev) const override {
+    for_each_id(ids, [&](int p) {
+      const double Jn = finite_ ? ps.F[p].determinant() / transfer::deformation_jacobian<Dim>(ps.L[p], dt)
+                                : 1.0;
+      ev[p] = hencky::volumetric_strain(e_, ps.sigma[p], Jn);
+    });
   }
 
   /// Stored elastic energy. Finite strain: ½ τ : C⁻¹ : τ per reference volume times V0 (= ψ of
@@ -65,46 +75,26 @@ class MohrCoulomb final : public MaterialModel<Dim> {
     if (r.region != mc::Region::elastic) ps.eps_p[p] += mc::equivalent_plastic_increment(r.deps_p);
   }
 
-  /// b_e,n from σ_n and J_n; b_tr = ΔF b_e,n ΔFᵀ; ε_tr = ½ ln b_tr; τ_tr = D ε_tr; return; σ = τ / J.
+  /// b_e,n from σ_n and J_n (shifted by ps.ev_shift under the modified F-bar); b_tr = ΔF b_e,n ΔFᵀ;
+  /// ε_tr = ½ ln b_tr; τ_tr = D ε_tr; return; σ = τ / J (materials/hencky_trial.hpp).
   bool finite_strain(ParticleSet<Dim>& ps, int p, double dt) const {
     const MatD<Dim> dF = transfer::deformation_increment<Dim>(ps.L[p], dt);
     const double J = ps.F[p].determinant();
     if (!(J > 0.0)) return false;
     const double Jn = J / dF.determinant();
-    Sym& s = ps.sigma[p];
-    if constexpr (Dim == 2) {
-      // Plane strain: b_e and τ are block diagonal (in-plane 2x2, zz); σ_yz = σ_xz = 0.
-      // ΔF_zz = 1, so the zz elastic strain of the trial is that of step n (no exp/log for it).
-      const Eig2 en = eig2(s[0], s[1], s[3]);
-      const Principal eps_n = p_.compliance(Jn * Principal(en.l1, en.l2, s[2]));
-      Eig2 et;
-      if (!spectral::plane_strain_trial(en, eps_n[0], eps_n[1], dF, et)) return false;
-      const Principal eps(0.5 * std::log(et.l1), 0.5 * std::log(et.l2), eps_n[2]);
-      const mc::Return r = admissible(p_.stiffness(eps));
-      const Sym2 t = rebuild(et, r.s[0], r.s[1]);
-      s << t.xx / J, t.yy / J, r.s[2] / J, t.xy / J, 0.0, 0.0;
-      add_plastic(ps, p, r);
-    } else {
-      // ε_e,n = C⁻¹ : τ_n as a tensor (isotropic), b_e,n = exp(2 ε_e,n).
-      const Mat3 tau_n = Jn * to_matrix(s);
-      const double vol = (1.0 / (9.0 * e_.K) - 1.0 / (6.0 * e_.mu)) * tau_n.trace();
-      const Mat3 B = sym_exp(tau_n / e_.mu + Mat3::Identity() * (2.0 * vol));
-      const Mat3 Bt = dF * B * dF.transpose();
-      Eigen::SelfAdjointEigenSolver<Mat3> eig;
-      eig.computeDirect(0.5 * (Bt + Bt.transpose()));
-      const Principal beta = eig.eigenvalues();
-      if (!(beta.minCoeff() > 0.0)) return false;
-      const mc::Return r = admissible(p_.stiffness(0.5 * beta.array().log().matrix()));
-      const Mat3& Q = eig.eigenvectors();
-      s = to_voigt(Q * (r.s / J).asDiagonal() * Q.transpose());
-      add_plastic(ps, p, r);
-    }
+    hencky::Trial<Dim> t;
+    if (!hencky::trial<Dim>(e_, ps.sigma[p], Jn, dF, ps.ev_shift.empty() ? 0.0 : ps.ev_shift[p], t)) return false;
+    const mc::Return r = admissible(p_.stiffness(t.eps));
+    ps.sigma[p] = hencky::cauchy<Dim>(t, r.s, J);
+    add_plastic(ps, p, r);
     return true;
   }
 
   /// Trial σ_tr = σ_n + Δt (λ tr D I + 2G D + W σ − σ W) (Jaumann, as linear-elastic); return.
+  /// Under the modified F-bar σ_n is first shifted by K ps.ev_shift[p] 1 (the small-strain b̄_e).
   bool small_strain(ParticleSet<Dim>& ps, int p, double dt) const {
     Sym& s = ps.sigma[p];
+    if (!ps.ev_shift.empty()) s.template head<3>().array() += e_.K * ps.ev_shift[p];
     const double G = e_.mu;
     if constexpr (Dim == 2) {
       const auto& L = ps.L[p];

@@ -9,9 +9,10 @@
 // ParticleSet::state. A zero stress (a point that never had one, or a gas-like one) is read as
 // zero elastic strain, ε_e,n = 0 (seed 001 after eq. 93: b_e ≈ I).
 //
-// Specific volume v = J v0 (seed 001 eq. 95) with J = det F of the particle. With F-bar on, the
-// stabilised J̄ (eq. 96–97) is meant here: the F-bar stage is to leave det F̄ in ps.F before the
-// stress update, and this model then reads it unchanged.
+// Specific volume v = J v0 (seed 001 eq. 95) with J = det F of the particle. With F-bar on, this is
+// the stabilised J̄ (eqs. 96–97): the F-bar stage (transfer/fbar.hpp) leaves F̄ (det F̄ = J̄) in ps.F
+// before the stress update, and this model reads it unchanged. Under the modified F-bar b_e,n is
+// shifted by ps.ev_shift (eq. 82) before the trial.
 #include "solver/materials/nor_sand.hpp"
 
 #include <stdexcept>
@@ -79,6 +80,22 @@ class NorSand final : public MaterialModel<Dim> {
     return update_each(ps, ids, [&](int p) { return update(ps, p, dt); });
   }
 
+  /// ε_v^e of b_e,n by NS4 from τ_n = J_n σ_n: ε_v = 3 (A − p B); 0 for a point without compression
+  /// (read as zero elastic strain, as update_stress does).
+  void elastic_volumetric_strain(const ParticleSet<Dim>& ps, std::span<const int> ids, double dt,
+                                 std::span<double> ev) const override {
+    for_each_id(ids, [&](int p) {
+      const double Jn = ps.F[p].determinant() / transfer::deformation_jacobian<Dim>(ps.L[p], dt);
+      const double pk = Jn * mean_stress(ps.sigma[p]);
+      if (!(pk > 0.0)) {
+        ev[p] = 0.0;
+        return;
+      }
+      const ns::Coaxial c = ns::elastic_strain_of(p_, pk, Jn * deviatoric_stress(ps.sigma[p]));
+      ev[p] = 3.0 * (c.A - pk * c.B);
+    });
+  }
+
   /// Ψ (NS1) of the elastic strain rebuilt from σ, per reference volume, times V0.
   double strain_energy(const ParticleSet<Dim>& ps, int p) const override {
     const double J = ps.F[p].determinant();
@@ -119,13 +136,14 @@ class NorSand final : public MaterialModel<Dim> {
       return true;
     }
     ns::State st = ns::State::load(ps.state[p]);
+    const double shift = ps.ev_shift.empty() ? 0.0 : ps.ev_shift[p];  // modified F-bar: b̄_e,n (eq. 82)
     ns::Return r;
     if constexpr (Dim == 2) {
       // Plane strain: in-plane 2x2 and zz apart (σ_xz = σ_yz = 0); ΔF_zz = 1 keeps ε_zz of step n.
       const Eig2 en = eig2(s[0], s[1], s[3]);
       const Principal tau_n = Jn * Principal(en.l1, en.l2, s[2]);
       const ns::Coaxial c = coaxial(tau_n, st);
-      const Principal eps_n = Principal::Constant(c.A) + c.B * tau_n;
+      const Principal eps_n = Principal::Constant(c.A + shift / 3.0) + c.B * tau_n;
       Eig2 et;
       if (!spectral::plane_strain_trial(en, eps_n[0], eps_n[1], dF, et)) return false;
       r = admissible(Principal(0.5 * std::log(et.l1), 0.5 * std::log(et.l2), eps_n[2]), v, st);
@@ -136,7 +154,7 @@ class NorSand final : public MaterialModel<Dim> {
       const Mat3 tau_n = Jn * to_matrix(s);
       const double pk = -tau_n.trace() / 3.0;
       const ns::Coaxial c = coaxial_pq(pk, std::sqrt(1.5) * (tau_n + pk * Mat3::Identity()).norm(), st);
-      const Mat3 B = spectral::sym_exp(2.0 * (c.A * Mat3::Identity() + c.B * tau_n));
+      const Mat3 B = spectral::sym_exp(2.0 * ((c.A + shift / 3.0) * Mat3::Identity() + c.B * tau_n));
       const Mat3 Bt = dF * B * dF.transpose();
       Eigen::SelfAdjointEigenSolver<Mat3> eig;
       eig.computeDirect(0.5 * (Bt + Bt.transpose()));

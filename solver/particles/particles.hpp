@@ -49,6 +49,13 @@ struct ParticleSet {
   // needs_material_state in materials/material.hpp; zero-initialised: "not set yet").
   std::vector<MaterialState> state;
 
+  // Modified F-bar (seed 001 eq. 82; solver/transfer/fbar.hpp): the shift ln(J̄^e / J^e) [-] of the
+  // elastic logarithmic volumetric strain that the material models add to b_e,n when they rebuild
+  // it at the start of the step. Scratch of one step, like L: written by the F-bar stage right
+  // before the stress update, empty unless solver.stabilisation.fbar is "modified"; not part of
+  // for_each_field (nothing reads it across steps, so reordering and snapshots skip it).
+  std::vector<double> ev_shift;
+
   std::size_t size() const { return x.size(); }
   bool two_phase() const { return carries_fluid_; }
   bool has_material_state() const { return carries_state_; }
@@ -85,6 +92,7 @@ struct ParticleSet {
     faces.resize(k);
     if (carries_fluid_) add_fluid();
     if (carries_state_) add_material_state();
+    ev_shift.clear();
   }
   /// Calls f(field) for every per-particle array (the one list of fields; resize-free helpers use it).
   template <class Fn>
@@ -99,7 +107,7 @@ struct ParticleSet {
            sizeof(MatD<Dim>) + sizeof(Sym) + sizeof(double) + 2 * sizeof(std::int32_t) +
            sizeof(std::uint32_t) +
            (carries_fluid_ ? 3 * sizeof(double) + sizeof(Vec<Dim>) + sizeof(std::int32_t) : 0) +
-           (carries_state_ ? sizeof(MaterialState) : 0);
+           (carries_state_ ? sizeof(MaterialState) : 0) + (ev_shift.empty() ? 0 : sizeof(double));
   }
   /// Copies the state of `o` (every field but L, which each step recomputes) reusing this set's
   /// capacity: the snapshot of the last good state costs no allocation after the first.

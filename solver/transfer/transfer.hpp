@@ -173,6 +173,13 @@ inline MatD<Dim> deformation_increment(const MatD<Dim>& L, double dt) {
   return (MatD<Dim>::Identity() - half).inverse() * (MatD<Dim>::Identity() + half);
 }
 
+/// det of deformation_increment(L, dt) without forming it: det(I + dt L/2) / det(I - dt L/2).
+template <int Dim>
+inline double deformation_jacobian(const MatD<Dim>& L, double dt) {
+  const MatD<Dim> half = 0.5 * dt * L;
+  return (MatD<Dim>::Identity() + half).determinant() / (MatD<Dim>::Identity() - half).determinant();
+}
+
 /// Velocity gradient L_p = sum_i v_i (x) grad N_ip, then F_{n+1} = dF F_n (deformation_increment) and V = det F V0.
 /// Returns the smallest particle index with det F <= 0 or a non-finite L, or -1.
 template <int Dim, int S>

@@ -202,3 +202,35 @@ TEST(BadInput, PermeabilityLawTheFormulationLacks) {
   EXPECT_NE(r.err.find("/materials/0/permeability_law"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "run" / "particles"));
 }
+
+// F-bar: the dry formulation accepts solver.stabilisation.fbar (and fbar_patch with "modified"),
+// rejects the pore-pressure and smoothing switches, and any formulation rejects a patch size the
+// chosen F-bar does not read; an out-of-range patch is a schema error.
+TEST(BadInput, FBarSwitches) {
+  json s = good_scene();
+  s["solver"]["stabilisation"] = {{"fbar", "modified"}, {"fbar_patch", 1.5}};
+  const fs::path dir = swmpm::testing::scratch("fbar-dry");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const Result ok = swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
+  EXPECT_EQ(ok.status, 0) << ok.err;
+  const json resolved = swmpm::testing::load_json((dir / "run" / "scene.json").string());
+  EXPECT_EQ(resolved["solver"]["stabilisation"]["fbar_patch"].get<double>(), 1.5);
+  s["solver"]["stabilisation"] = {{"fbar", "standard"}, {"fbar_patch", 1.5}};
+  expect_rejected(s, "fbar-patch", "/solver/stabilisation/fbar_patch", "modified");
+  s["solver"]["stabilisation"] = {{"fbar", "standard"}, {"strain_smoothing", true}};
+  expect_rejected(s, "fbar-smoothing", "/solver/stabilisation/strain_smoothing", "dry");
+  s["solver"]["stabilisation"] = {{"fbar", "modified"}, {"fbar_patch", 0.5}};
+  expect_rejected(s, "fbar-range", "/solver/stabilisation/fbar_patch", "0.5");
+  // The default patch follows the shape function: 1 for GIMP, 1.5 for the B-splines.
+  for (const char* shape : {"gimp", "bspline2"}) {
+    json d = good_scene();
+    d["grid"]["shape_function"] = shape;
+    d["solver"]["stabilisation"] = {{"fbar", "modified"}};
+    const fs::path dd = swmpm::testing::scratch(std::string("fbar-default-") + shape);
+    std::ofstream(dd / "scene.json") << d.dump(2);
+    ASSERT_EQ(swmpm_cmd("preprocess " + (dd / "scene.json").string() + " -o " + (dd / "run").string(), dd).status, 0);
+    EXPECT_EQ(swmpm::testing::load_json((dd / "run" / "scene.json").string())["solver"]["stabilisation"]["fbar_patch"]
+                  .get<double>(),
+              std::string(shape) == "gimp" ? 1.0 : 1.5);
+  }
+}
