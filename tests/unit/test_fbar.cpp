@@ -202,6 +202,8 @@ void check_standard(double scale) {
     // The increment the materials rebuild from L̄ is ΔF̄: det ΔF̄ = ΔJ̄ (eq. 79), same isochoric part.
     const MatD<Dim> dFbar = transfer::deformation_increment<Dim>(ps.L[p], dt);
     EXPECT_NEAR(dFbar.determinant(), dJbar[p], 1e-13) << p;
+    // What a hypoelastic model integrates: Δt tr L̄ = ln ΔJ̄ + O(Δt³) (here |Δt L| ~ 0.02).
+    EXPECT_NEAR(dt * ps.L[p].trace(), std::log(dJbar[p]), 1e-5) << p;
     const double c = std::pow(dJbar[p] / dJ[p], 1.0 / Dim);
     EXPECT_LT((dFbar - c * dF[p]).norm(), 1e-13) << p;
     // F̄_{n+1} = ΔF̄ F_n, V = det F̄ V0; plane strain keeps F_zz = 1 and no out-of-plane shear.
