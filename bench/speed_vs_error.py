@@ -99,11 +99,13 @@ def run_case(a, base, shape, h, ppc, step, work):
     # A diverged run (exit 3) still writes run.json; its status is reported and the row skipped.
     # A run longer than --max-wall seconds is stopped and reported the same way.
     try:
-        subprocess.run([a.swmpm, "-q", "solve", rd, "--threads", str(a.threads)], check=False,
-                       timeout=a.max_wall or None)
+        r = subprocess.run([a.swmpm, "-q", "solve", rd, "--threads", str(a.threads)], check=False,
+                           timeout=a.max_wall or None, stderr=subprocess.PIPE, text=True)
     except subprocess.TimeoutExpired:
         return s, rd, {"status": f"stopped after --max-wall {a.max_wall:g} s"}
     if not os.path.exists(os.path.join(rd, "run.json")):
+        if r.returncode == 1:  # a setup error: the solver refused the case (reported, row skipped)
+            return s, rd, {"status": "rejected (" + r.stderr.strip().splitlines()[-1] + ")"}
         sys.exit(f"{name}: swmpm solve wrote no run.json (see {rd})")
     with open(os.path.join(rd, "run.json")) as f:
         rj = json.load(f)
@@ -129,7 +131,10 @@ def column_error(scene, rd, h, ppc):
 def last_frame(swmpm, rd):
     """The run's last frame as (time, {column: [values]}), read through VTK by
     `swmpm postprocess RUN frame` (columns x, y[, z], then every array: displacement_y, pore_pressure, ...)."""
-    out = subprocess.run([swmpm, "-q", "postprocess", rd, "frame", "--time", "1e300"], check=True,
+    # The run's own end time: with --time 1e300 every frame is equally far (1e300 - t == 1e300).
+    with open(os.path.join(rd, "run.json")) as f:
+        end = json.load(f)["end_time"]
+    out = subprocess.run([swmpm, "-q", "postprocess", rd, "frame", "--time", repr(end)], check=True,
                          capture_output=True, text=True).stdout
     lines = out.splitlines()
     t = float(re.search(r"the frame at t = ([0-9.eE+-]+) s", "\n".join(l for l in lines if l.startswith("#"))).group(1))
@@ -249,7 +254,9 @@ def chart(rows, path, metric, title):
                 for r in rows:
                     if r["shape"] == shape:
                         f.write(f"{max(abs(r['error']), 1e-7)} {r['wall']} {r['ppc']}\n")
-            plots.append(f"'{data}' using 1:2 with points pt {[7, 5, 9, 11][k % 4]} ps 1.6 title '{shape}'")
+            colour = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
+                      "#bcbd22", "#17becf"][k % 10]
+            plots.append(f"'{data}' using 1:2 with points pt {[7, 5, 9, 11][k % 4]} ps 1.6 lc rgb '{colour}' title '{shape}'")
         # The x range always shows the 1 % line, with room for its label.
         errors = [max(abs(r["error"]), 1e-7) for r in rows]
         x_lo = min(10 ** math.floor(math.log10(min(errors))), 0.003)
@@ -270,6 +277,19 @@ set label '1 %' at 0.01, graph 0.5 left offset 0.5,0 tc rgb '#555555'
 plot {', '.join(plots)}
 """
         subprocess.run(["gnuplot"], input=script, text=True, check=True)
+
+
+def read_table(path, label):
+    """The rows of a table this script wrote, each shape renamed "<label> <shape>" (for --combine)."""
+    rows = []
+    with open(path) as f:
+        for line in f:
+            cells = [c.strip() for c in line.strip().strip("|").split("|")]
+            if len(cells) < 8 or not re.match(r"^[0-9.]+$", cells[0]):
+                continue
+            rows.append(dict(shape=f"{label} {cells[2]}", h=float(cells[0]), ppc=int(cells[1]),
+                             wall=float(cells[6]), error=float(cells[7].rstrip(" %")) / 100))
+    return rows
 
 
 def main():

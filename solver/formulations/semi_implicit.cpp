@@ -107,6 +107,17 @@ class SemiImplicit final : public Formulation<Dim> {
     else
       throw std::runtime_error("solver.stabilisation.pressure: \"" + st.pressure + "\" is not available in " + name() +
                                " (available: node-remap, mfvp-linear, none)");
+    if constexpr (Shape::bspline) {
+      // One point per cell and axis under-integrates the B-spline supports (3 or 4 cells wide):
+      // B1 diverges within 4-9 steps at every cell size, both variants (bench/results/
+      // speed-vs-error-b1-*-2026-12-01.md). Two or more points per cell work.
+      const ParticleSet<Dim>& sp = state.solid;
+      for (std::size_t p = 0; p < sp.size(); ++p)
+        if (2.0 * sp.l[p].maxCoeff() > 0.75 * s.grid.cell_size)
+          throw std::runtime_error("bodies/" + std::to_string(sp.body[p]) + "/particles_per_cell: 1 point per cell "
+                                   "and axis is not available with " + scene::to_string(s.grid.shape_function) +
+                                   " in " + name() + " (it diverges within 10 steps); use 2 or more, or gimp");
+    }
     if (!state.solid.two_phase())
       throw std::runtime_error(name() + " needs saturated soil points (porosity in particles/solid.vtu): run swmpm "
                                "preprocess with a body that has a solid and a fluid");

@@ -234,3 +234,18 @@ TEST(BadInput, FBarSwitches) {
               std::string(shape) == "gimp" ? 1.0 : 1.5);
   }
 }
+
+// B-splines with one point per cell and axis diverge in the semi-implicit formulations (B1: within
+// 4-9 steps at every cell size): the solver stops before the first step, naming the body's key.
+TEST(BadInput, SemiImplicitBsplinesNeedTwoPointsPerCell) {
+  json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene.json");
+  s["grid"]["shape_function"] = "bspline2";
+  s["bodies"][0]["particles_per_cell"] = 1;
+  s["time"]["end"] = 0.001;
+  const fs::path dir = swmpm::testing::scratch("bad-si-bspline-ppc1");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const Result r = swmpm_cmd("-q run " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("bodies/0/particles_per_cell"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "run" / "run.json"));
+}

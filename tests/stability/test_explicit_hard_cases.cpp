@@ -18,6 +18,7 @@
 
 #include "support/indicators.hpp"
 #include "support/run_helpers.hpp"
+#include "support/soft_block.hpp"
 
 namespace {
 
@@ -356,23 +357,11 @@ TEST(HardCases, JustBelowTwiceTheCriticalStepIsStoppedOrStaysPhysical) {
 // impermeable base (both sides and the top free and drained), under a 0.1 s gravity ramp; the
 // full symmetric block (A5 models half of it with a symmetry wall). mfvp-linear + smoothing.
 TEST(HardCases, SoftSaturatedBlockUnderGravityStaysBoundedSmoothAndSymmetric) {
-  json s = json::parse(R"json({
-    "name": "soft-block", "dimension": 2, "formulation": "explicit-single-point",
-    "gravity": [0.0, -9.81], "gravity_ramp": 0.1,
-    "grid": { "cell_size": 0.1, "min": [0.0, 0.0], "max": [3.0, 1.5], "shape_function": "gimp" },
-    "materials": [
-      { "name": "soft", "model": "linear-elastic", "grain_density": 2650.0, "porosity": 0.4,
-        "youngs_modulus": 1.0e5, "poisson_ratio": 0.3, "hydraulic_conductivity": 1.0e-4 },
-      { "name": "water", "model": "fluid", "density": 1000.0, "bulk_modulus": 2.2e9 } ],
-    "bodies": [ { "name": "block", "geometry": { "type": "box", "min": [0.5, 0.0], "max": [2.5, 1.0] },
-                  "solid": "soft", "fluid": "water", "particles_per_cell": 2 } ],
-    "boundaries": [ { "on": "y_min", "solid": "roller", "fluid": "impermeable" } ],
-    "time": { "end": 0.3, "dt": "auto", "cfl": 0.5 },
-    "solver": { "stabilisation": { "pressure": "mfvp-linear", "strain_smoothing": true } },
-    "output": { "interval": 0.05, "monitor_interval": 0.001, "monitors": [
-        { "name": "base", "at": [1.525, 0.025], "quantities": ["pore_pressure"] },
-        { "name": "energy", "quantities": ["kinetic_energy", "strain_energy", "external_work"] } ] }
-  })json");
+  json s = swmpm::testing::soft_block_scene("explicit-single-point", 1.0e5);
+  s["solver"] = json::parse(R"json({ "stabilisation": { "pressure": "mfvp-linear", "strain_smoothing": true } })json");
+  s["output"] = json::parse(R"json({ "interval": 0.05, "monitor_interval": 0.001, "monitors": [
+      { "name": "base", "at": [1.525, 0.025], "quantities": ["pore_pressure"] },
+      { "name": "energy", "quantities": ["kinetic_energy", "strain_energy", "external_work"] } ] })json");
   const std::string run = swmpm::testing::run_scene(s, "hard-soft-block", 1);
   const auto tab = swmpm::post::read_csv(run + "/monitors.csv");
   const double bound = ((1 - 0.4) * 2650.0 + 0.4 * 1000.0) * g * 1.0;  // rho_sat g H = 19.5 kPa

@@ -7,6 +7,7 @@
 #include "scene/scene.hpp"
 #include "support/indicators.hpp"
 #include "support/run_helpers.hpp"
+#include "support/soft_block.hpp"
 
 namespace {
 
@@ -109,23 +110,11 @@ FieldStats run_field(const json& s, const std::string& name, double radius) {
 /// impermeable base: its top and both sides are free, drained surfaces between the nodes. Gravity
 /// ramped over 0.1 s, dt auto (soil CFL 0.5), 0.5 s: it spreads and rings.
 json soft_block(const std::string& formulation, const std::string& shape) {
-  json s = json::parse(R"json({
-    "name": "si-block", "dimension": 2, "formulation": "semi-implicit-single-point",
-    "gravity": [0.0, -9.81], "gravity_ramp": 0.1,
-    "grid": { "cell_size": 0.1, "min": [0.0, 0.0], "max": [3.0, 1.5], "shape_function": "bspline2" },
-    "materials": [
-      { "name": "soft", "model": "linear-elastic", "grain_density": 2650.0, "porosity": 0.4,
-        "youngs_modulus": 1.0e6, "poisson_ratio": 0.3, "hydraulic_conductivity": 1.0e-4 },
-      { "name": "water", "model": "fluid", "density": 1000.0, "bulk_modulus": 2.2e9 } ],
-    "bodies": [ { "name": "block", "geometry": { "type": "box", "min": [0.5, 0.0], "max": [2.5, 1.0] },
-                  "solid": "soft", "fluid": "water", "particles_per_cell": 2 } ],
-    "boundaries": [ { "on": "y_min", "solid": "roller", "fluid": "impermeable" } ],
-    "time": { "end": 0.5, "dt": "auto", "cfl": 0.5 },
-    "solver": { "stabilisation": { "pressure": "mfvp-linear" } },
-    "output": { "interval": 0.05 }
-  })json");
-  s["formulation"] = formulation;
+  json s = swmpm::testing::soft_block_scene(formulation, 1.0e6);
   s["grid"]["shape_function"] = shape;
+  s["time"]["end"] = 0.5;
+  s["solver"] = {{"stabilisation", {{"pressure", "mfvp-linear"}}}};
+  s["output"] = {{"interval", 0.05}};
   return s;
 }
 
