@@ -62,8 +62,15 @@ class NorSand final : public MaterialModel<Dim> {
   explicit NorSand(ns::Params p) : p_(p) {}
   std::string name() const override { return "nor-sand"; }
   /// Off: the hyperelastic trial (NS2) is the stress and π_i stays unset, so that the first plastic
-  /// step takes it from the stress then (App. B.4: p0, ε_v0^e from the end of elastic loading, eq. 113).
-  void set_plastic(bool on) override { plastic_ = on; }
+  /// step takes it from the stress then (App. B.4: p0, ε_v0^e from the end of elastic loading), by
+  /// eq. 113 as printed: π_i = OCR p0 (1 − N)^{(1−N)/N} from the mean stress alone, so a point with
+  /// a deviator starts outside the surface and yields at once (the landslides of §5.4 start so).
+  /// Without an elastic phase (a geostatic initial stress, say), π_i puts the stress point itself
+  /// on the surface (eq. 113 generalised to q > 0): the initial state is in equilibrium at step 0.
+  void set_plastic(bool on) override {
+    plastic_ = on;
+    if (!on) after_elastic_phase_ = true;
+  }
 
   /// K + 4G/3 at zero elastic strain: K = p̂(0)/κ̃ (formulations ask max_p_wave_modulus instead).
   double p_wave_modulus() const override { return modulus_at(p_.p_unstrained()); }
@@ -124,8 +131,38 @@ class NorSand final : public MaterialModel<Dim> {
  private:
   double modulus_at(double p) const { return p / p_.kappa + 4.0 / 3.0 * (p_.mu0 + p_.alpha0 * p); }
 
-  /// One particle: gas-like check (eq. 93), b_e,n from σ_n, trial, return (NS10–11), σ = τ / J.
+  /// One particle. When the return mapping does not converge (a trial far outside the surface:
+  /// a velocity-gradient spike at a free surface gave q/p ≈ 300 in one step of B5), the step is
+  /// repeated in 64 or 256 equal sub-steps of the same velocity gradient (F_n → F_{n+1} through
+  /// ΔF(L, dt/m)^k), each a full return; the modified F-bar shift applies to the first only.
   bool update(ParticleSet<Dim>& ps, int p, double dt) const {
+    const Sym sigma_n = ps.sigma[p];
+    const MaterialState state_n = ps.state[p];
+    const double eps_p_n = ps.eps_p[p];
+    const double shift = ps.ev_shift.empty() ? 0.0 : ps.ev_shift[p];
+    if (update_once(ps, p, dt, shift)) return true;
+    const Mat3 F_end = ps.F[p];
+    Mat3 dF = Mat3::Identity();
+    dF.template topLeftCorner<Dim, Dim>() = transfer::deformation_increment<Dim>(ps.L[p], dt);
+    const Mat3 F_n = dF.inverse() * F_end;
+    for (int m : {64, 256}) {
+      ps.sigma[p] = sigma_n, ps.state[p] = state_n, ps.eps_p[p] = eps_p_n, ps.F[p] = F_n;
+      Mat3 dF_sub = Mat3::Identity();
+      dF_sub.template topLeftCorner<Dim, Dim>() = transfer::deformation_increment<Dim>(ps.L[p], dt / m);
+      bool ok = true;
+      for (int k = 0; k < m && ok; ++k) {
+        ps.F[p] = k + 1 == m ? F_end : Mat3(dF_sub * ps.F[p]);
+        ok = update_once(ps, p, dt / m, k == 0 ? shift : 0.0);
+      }
+      if (ok) return true;
+    }
+    ps.F[p] = F_end;
+    return false;
+  }
+
+  /// One step: gas-like check (eq. 93), b_e,n from σ_n (shifted by the modified F-bar's ln(J̄^e/J^e)),
+  /// trial, return (NS10–11), σ = τ / J.
+  bool update_once(ParticleSet<Dim>& ps, int p, double dt, double shift) const {
     const MatD<Dim> dF = transfer::deformation_increment<Dim>(ps.L[p], dt);
     const double J = ps.F[p].determinant();
     if (!(J > 0.0)) return false;
@@ -136,7 +173,6 @@ class NorSand final : public MaterialModel<Dim> {
       return true;
     }
     ns::State st = ns::State::load(ps.state[p]);
-    const double shift = ps.ev_shift.empty() ? 0.0 : ps.ev_shift[p];  // modified F-bar: b̄_e,n (eq. 82)
     ns::Return r;
     if constexpr (Dim == 2) {
       // Plane strain: in-plane 2x2 and zz apart (σ_xz = σ_yz = 0); ΔF_zz = 1 keeps ε_zz of step n.
@@ -186,7 +222,8 @@ class NorSand final : public MaterialModel<Dim> {
   }
 
   /// NS4 for principal Kirchhoff stresses; ε_e = 0 (A = B = 0) for a point without compression.
-  /// Sets π_i of a point that has none yet (NS5 with OCR, seed 001 eq. 113 generalised).
+  /// Sets π_i of a point that has none yet (NS5 with OCR: seed 001 eq. 113 after an elastic phase,
+  /// eq. 113 generalised to the stress point otherwise; see set_plastic).
   ns::Coaxial coaxial(const Principal& tau, ns::State& st) const {
     const double pk = -tau.sum() / 3.0;
     const Principal dev = tau + Principal::Constant(pk);
@@ -195,12 +232,14 @@ class NorSand final : public MaterialModel<Dim> {
   ns::Coaxial coaxial_pq(double pk, double qk, ns::State& st) const {
     const bool stressed = pk > 0.0;
     if (!(st.pi > 0.0))
-      st.pi = stressed ? ns::initial_image_pressure(p_, pk, qk) : ns::initial_image_pressure(p_, p_.p_unstrained(), 0.0);
+      st.pi = stressed ? ns::initial_image_pressure(p_, pk, after_elastic_phase_ ? 0.0 : qk)
+                       : ns::initial_image_pressure(p_, p_.p_unstrained(), 0.0);
     return stressed ? ns::elastic_strain_of(p_, pk, qk) : ns::Coaxial{};
   }
 
   ns::Params p_;
   bool plastic_ = true;
+  bool after_elastic_phase_ = false;  // π_i by eq. 113 from p alone (App. B.4)
 };
 
 }  // namespace

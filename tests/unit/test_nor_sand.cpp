@@ -430,7 +430,8 @@ TEST(NorSand, NeedsFiniteStrainAndMaterialState) {
 TEST(NorSand, ElasticPhaseLeavesTheImagePressureUnsetUntilPlasticityStarts) {
   // Seed 001 App. B.4: during the elastic gravity phase the hyperelastic law alone gives the
   // stress (NS2), π_i stays unset, and when plasticity starts the first step takes π_i from the
-  // stress reached (OCR = 1: on the yield surface, eq. 113 generalised to q > 0).
+  // mean stress reached by eq. 113 (OCR = 1: the isotropic state at p on the surface), so a point
+  // with a deviator is outside and yields at once, back onto the (hardened) surface.
   const ns::Params m = hostun(1.85);
   auto model = make_material<3>(material(1.85), finite_strain());
   model->set_plastic(false);
@@ -453,9 +454,51 @@ TEST(NorSand, ElasticPhaseLeavesTheImagePressureUnsetUntilPlasticityStarts) {
   ASSERT_GT(q / p, 1.2 * m.M);  // far outside any surface through p at the isotropic start
   model->set_plastic(true);
   drive<3>(*model, ps, L, 1e-9, 1);  // a vanishing increment: π_i from the stress reached
-  const double pi = ps.state[0][0];
-  std::printf("elastic phase: q/p' = %.3f at the end, pi_i unset; first plastic step: pi_i = %.4g Pa, "
-              "F(p, q, pi_i) = %.2e of p\n", q / p, pi, ns::yield_function(m, p, q, pi) / p);
+  const double pi = ps.state[0][0], J1 = ps.F[0].determinant();
+  const double p1 = J1 * mean_stress(ps.sigma[0]), q1 = J1 * deviatoric_stress(ps.sigma[0]);
+  std::printf("elastic phase: q/p' = %.3f at the end, pi_i unset (eq. 113 would give %.4g Pa); first plastic "
+              "step: yields (eps_p %.3g), q/p' %.3f, pi_i = %.4g Pa, F(p, q, pi_i) = %.2e of p\n", q / p,
+              ns::initial_image_pressure(m, p, 0.0), ps.eps_p[0], q1 / p1, pi, ns::yield_function(m, p1, q1, pi) / p1);
+  EXPECT_GT(ps.eps_p[0], 1e-4);  // it started outside the surface of eq. 113
+  EXPECT_LT(q1, 0.9 * q);
   EXPECT_GT(pi, 0.0);
-  EXPECT_NEAR(ns::yield_function(m, p, q, pi), 0.0, 1e-6 * p);
+  EXPECT_NEAR(ns::yield_function(m, p1, q1, pi), 0.0, 1e-6 * p1);
+}
+
+TEST(NorSand, ExtremeTrialIsSubsteppedOntoTheSurface) {
+  // A free-surface point of the B5 landslide (dense, v0 = 1.55; dumped from the run where the
+  // return first failed): p' = 761 Pa, π_i = 1030 Pa, Ē_d^p = 0.76 %, the modified F-bar's
+  // volumetric shift of b_e,n 5.8e-4, and a velocity gradient of
+  // ~20 1/s over dt = 2.4e-4 s that puts the one-step trial at q/p' ≈ 800. Newton does not
+  // converge from there, so the model repeats the step in sub-steps (64): the result lies on the
+  // yield surface and agrees with driving the same L in 256 small steps.
+  auto model = make_material<2>(material(1.55), finite_strain());
+  const ns::Params m = hostun(1.55);
+  Sym s0;
+  s0 << -0x1.bcf4537cc23e7p+8, -0x1.27f014504725dp+10, -0x1.477bc90aed32cp+9, 0x1.a2bdc1a096625p+8, 0.0, 0.0;
+  auto a = one_particle<2>(s0);
+  a.state[0] = MaterialState{0x1.019b10416b6ap+10, 0x1.f157a3ad40a77p-8, 0.0, 0.0};
+  a.F[0] << 0x1.0309b33934fafp+0, 0x1.50bcb7836843cp-17, 0.0, 0x1.061def0b53daep-7, 0x1.fde043f350d22p-1, 0.0, 0.0,
+      0.0, 1.0;
+  const double dt = 0x1.f75104d551d69p-13;
+  MatD<2> L;
+  L << 0x1.2b9c582c290a5p+3, 0x1.3d814273c246p+2, 0x1.445b576f8ed47p+4, -0x1.4fc7168ead85fp+4;
+  // F above is F_{n+1}: step back to F_n for the drives.
+  Mat3 dF = Mat3::Identity();
+  dF.topLeftCorner<2, 2>() = transfer::deformation_increment<2>(L, dt);
+  a.F[0] = dF.inverse() * a.F[0];
+  a.V[0] = a.V0[0] * a.F[0].determinant();
+  a.ev_shift.assign(1, 0x1.300f237e1472p-11);  // the modified F-bar's ln(J̄^e / J^e) of that step
+  auto b = a;
+  drive<2>(*model, a, L, dt, 1);
+  drive<2>(*model, b, L, dt / 256, 1);  // the shift belongs to the start of the step only
+  b.ev_shift.assign(1, 0.0);
+  drive<2>(*model, b, L, dt / 256, 255);
+  const double Ja = a.F[0].determinant(), pa = Ja * mean_stress(a.sigma[0]), qa = Ja * deviatoric_stress(a.sigma[0]);
+  const double Jb = b.F[0].determinant(), pb = Jb * mean_stress(b.sigma[0]), qb = Jb * deviatoric_stress(b.sigma[0]);
+  std::printf("extreme trial: one step p' %.4g q %.4g pi_i %.4g (F %.1e of p'); 256 steps p' %.4g q %.4g pi_i %.4g\n",
+              pa, qa, a.state[0][0], ns::yield_function(m, pa, qa, a.state[0][0]) / pa, pb, qb, b.state[0][0]);
+  EXPECT_NEAR(ns::yield_function(m, pa, qa, a.state[0][0]), 0.0, 1e-6 * pa);
+  EXPECT_NEAR(pa, pb, 0.01 * pb);  // measured: 2109 vs 2111 Pa, q 1665 vs 1662 Pa
+  EXPECT_NEAR(qa, qb, 0.01 * qb);
 }
