@@ -100,6 +100,7 @@ class SemiImplicit final : public Formulation<Dim> {
         material_particles_(group_by_material(state.solid, s.materials.size())),
         poisson_(grid_),
         fbar_(s, grid_) {
+    conservative_ = s.solver.continuity == "conservative";
     const auto& st = s.solver.stabilisation;
     if (st.pressure == "node-remap") remap_ = Remap::node;
     else if (st.pressure == "mfvp-linear") remap_ = Remap::linear;
@@ -581,7 +582,18 @@ class SemiImplicit final : public Formulation<Dim> {
       });
   }
 
-  /// (5c) right-hand side -(1/dt)(D^s v_s* + D^w v_w*) and the CHOLMOD solve.
+  /// (5c) right-hand side and the CHOLMOD solve. The continuity is the mixture's volume balance
+  /// in conservation form, div[(1 - n) v_s + n v_w] = 0 (the sum of the phases' mass balances with
+  /// incompressible constituents), tested with S_I, with the flux interpolated from the nodal fluxes
+  /// q_K = (1 - n_K) v_sK + n_K v_wK (n_K of eq. 46):
+  ///   rhs_I = -(1/dt) sum_K D0_IK . q_K,   D0_IK = sum_p V_p S_I grad S_K = (D^s + D^w)_IK
+  /// (soil points carry (1 - n) V, water points n V: together the mixture volume). Expanded,
+  ///   div q = (1 - n) div v_s + n div v_w + (v_w - v_s) . grad n,
+  /// the paper's eq. 60 right-hand side -(1/dt)(D^s v_s* + D^w v_w*) without the last term. That
+  /// term is the water leaving a compacting zone; without it B2 consolidates 15 % too fast
+  /// (docs/formulations.md, "Continuity in conservation form"). With uniform porosity both agree.
+  /// The pressure forces keep the strong gradient with the points' porosity (G = D^s, D^w read
+  /// transposed).
   bool solve_pressure(double dt) {
     const double inv_dt = 1.0 / dt;
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto& ijk) {
@@ -593,7 +605,12 @@ class SemiImplicit final : public Formulation<Dim> {
       for (int kk = 0; kk < KD; ++kk) {
         if (!inside(ijk, DSt::offset(kk))) continue;
         const std::size_t Kn = i + d_steps_[kk];
-        div += Ds_i[kk].dot(soil_.v[Kn]) + Dw_i[kk].dot(water_.v[Kn]);
+        if (conservative_) {
+          const double nK = node_[Kn].n;
+          div += (Ds_i[kk] + Dw_i[kk]).dot((1.0 - nK) * soil_.v[Kn] + nK * water_.v[Kn]);
+        } else {
+          div += Ds_i[kk].dot(soil_.v[Kn]) + Dw_i[kk].dot(water_.v[Kn]);
+        }
       }
       poisson_.rhs(i) = -inv_dt * div;
     });
@@ -908,6 +925,7 @@ class SemiImplicit final : public Formulation<Dim> {
   std::vector<Permeability> perm_;          // per solid material (the initialisation phase's while it runs)
   std::vector<Permeability> scene_perm_;    // per solid material, as the scene gives it
   bool tie_ = false;                        // initialisation: water points follow their soil points
+  bool conservative_ = false;                // solver.continuity = conservative (solve_pressure)
   bool fast_drainage_ = false;              // initialisation with its own permeability is running
   std::vector<std::int64_t> partner_;       // per water-point id: the coincident soil point's id (-1: none)
   std::vector<int> fluid_of_material_;      // per solid material: its pore water's material

@@ -56,8 +56,9 @@ double reference_final(const std::string& reference) {
 
 }  // namespace
 
-// Measured (single-point): hencky 0.15301 m at 20 s vs 0.15376 (-0.49 %), history within ... %
-// relative L2; linear-elastic 0.17841 vs 0.17933 (-0.51 %), ... %; ratio 1.166.
+// Measured (single-point, conservative continuity): hencky 0.15298 m at 20 s vs 0.15333 (-0.2 %),
+// history 1.17 % relative L2 (max error 2.2 mm at 0.02 s, the first cell's sub-cell boundary
+// layer); linear-elastic 0.17807 vs 0.17802 (+0.03 %), 1.03 %; ratio 1.164 vs 1.161.
 TEST(LargeStrainSemiImplicit, B2FiniteAndSmallStrainSettlementsSinglePoint) {
   const B2 finite = run_b2("scene.json", "semi-implicit-single-point", "reference-monitor-settlement-hencky.csv",
                            "b2-sp-finite");
@@ -74,4 +75,19 @@ TEST(LargeStrainSemiImplicit, B2FiniteAndSmallStrainSettlementsSinglePoint) {
   // The paper's finding: the small-strain reading settles about 17 % more.
   EXPECT_NEAR(small.final / finite.final, ref_small / ref_finite, 0.02);
   EXPECT_GT(small.final / finite.final, 1.12);
+}
+
+// The mixture volume balance in the paper's non-conservative form (1 - n) div v_s + n div v_w
+// drops (v_w - v_s) . grad n; at large strain the drained top compacts (n 0.30 -> 0.15) and the
+// dropped term is as large as the rest, so the column consolidates faster than Darcy flow allows.
+// Measured: relative L2 14 % over 0-3 s with cells 0.05, 0.025 and 0.0125 m alike (not a
+// resolution effect); conservative 0.4 %.
+TEST(LargeStrainSemiImplicit, B2NonConservativeContinuityConsolidatesTooFast) {
+  json s = swmpm::testing::load_json(std::string(kDir) + "scene-small-strain.json");
+  s["solver"]["continuity"] = "non-conservative";
+  s["time"]["end"] = 3.0;
+  const std::string run = swmpm::testing::run_scene(s, "b2-sp-nonconservative");
+  const auto c = swmpm::post::compare(run, "top.displacement_y", std::string(kDir) + "reference-monitor-settlement-small-strain.csv");
+  std::printf("B2 non-conservative continuity, 0-3 s: relative L2 %.2f %%\n", 100 * c.rel_l2);
+  EXPECT_GT(c.rel_l2, 0.08);
 }
