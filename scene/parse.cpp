@@ -762,7 +762,7 @@ const Table& body_table() {
            .meaning = "Name of a solid material (the skeleton)."},
           {.name = "fluid", .type = Type::string,
            .meaning = "Name of a `fluid` material (pore fluid, or free fluid without `solid`)."},
-          {.name = "particles_per_cell", .type = Type::integer, .def = 2, .range = closed(1, 8),
+          {.name = "particles_per_cell", .type = Type::integer, .def = 2, .range = closed(1, 32),
            .meaning = "Particles per cell and direction (n^dimension per cell)."},
           {.name = "initial", .type = Type::object,
            .meaning = "Initial state, see [initial state](#initial-state).", .default_text = "all defaults"},

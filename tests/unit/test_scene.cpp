@@ -389,7 +389,7 @@ TEST(SceneErrors, WrongTypes) {
   EXPECT_TRUE(reports(n, "/solver/stabilisation/strain_smoothing", "expected true or false"));
   json o = scene_3d();
   o["bodies"][0]["particles_per_cell"] = 2.5;
-  EXPECT_TRUE(reports(o, "/bodies/0/particles_per_cell", "expected an integer in 1..8"));
+  EXPECT_TRUE(reports(o, "/bodies/0/particles_per_cell", "expected an integer in 1..32"));
   json p = scene_2d();
   p["loads"][0]["value"] = 5.0;  // a traction needs a vector
   EXPECT_TRUE(reports(p, "/loads/0/value", "for a traction [Pa]"));
@@ -411,8 +411,8 @@ TEST(SceneErrors, OutOfRangeValues) {
       {"/materials/0/porosity", 1.0, "/materials/0/porosity", "expected a number in (0, 1) [-]"},
       {"/materials/0/porosity", 0, "/materials/0/porosity", "in (0, 1)"},
       {"/solver/flip", 1.5, "/solver/flip", "expected a number in [0, 1] [-]"},
-      {"/bodies/0/particles_per_cell", 9, "/bodies/0/particles_per_cell", "an integer in 1..8"},
-      {"/bodies/0/particles_per_cell", 0, "/bodies/0/particles_per_cell", "an integer in 1..8"},
+      {"/bodies/0/particles_per_cell", 33, "/bodies/0/particles_per_cell", "an integer in 1..32"},
+      {"/bodies/0/particles_per_cell", 0, "/bodies/0/particles_per_cell", "an integer in 1..32"},
       {"/time/dt", 0.0, "/time/dt", "expected a positive number or \"auto\" [s]"},
       {"/time/end", 0.0, "/time/end", "expected a positive number [s]"},
       {"/time/cfl", 0.0, "/time/cfl", "in (0, 1]"},
