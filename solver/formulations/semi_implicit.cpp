@@ -542,6 +542,15 @@ class SemiImplicit final : public Formulation<Dim> {
     const auto& sdw = double_point_ ? sdw_ : sd_;
     const auto& wsched = double_point_ ? wschedule_ : schedule_;
     linear_.fit(grid_, box_, wsched, sdw, ws.x, [&](int p) { return ws.V[p]; }, [&](int p) { return ws.p[p]; });
+    // A node whose water lies in a strip of its support (free surface) has an ill-posed linear fit
+    // (leverage > NodeProjection::kMaxLeverage): it takes the gradient of the nearest well-posed node inward
+    // along its cut and fits only its value (docs/formulations.md, "Free-surface nodes whose fit
+    // is ill-posed"). Reads well-posed nodes only, writes its own: independent of the node order.
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto& ijk) {
+      if (!linear_.has(i) || linear_.well_posed(i)) return;
+      const std::size_t src = inward_well_posed(i, ijk);
+      if (src != i) linear_.impose_gradient(grid_, i, linear_.gradient_at_node(grid_, src));
+    });
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { p_node_[i] = linear_.at_node(i); });
     poisson_.clear(grid_, box_);
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
@@ -626,18 +635,52 @@ class SemiImplicit final : public Formulation<Dim> {
   /// pressures shifted to vanish on the surface x_s (the water's extent along the axis of the
   /// largest cut): p_D = -dp/dx_a (x_s - x_Ia). Exact for a hydrostatic or any linear field.
   bool free_surface(std::size_t i, const std::array<int, Dim>& ijk, double& p_D) const {
-    const NodeExtra& e = node_[i];
     p_D = 0.0;
-    double cut = 0.0, x_s = 0.0;
+    double x_s = 0.0;
     int axis = -1;
-    for (int a = 0; a < Dim; ++a) {
-      const auto [s_lo, s_hi] = support_range(a, ijk[a]);
-      if (s_hi - e.hi[a] > cut) cut = s_hi - e.hi[a], x_s = e.hi[a], axis = a;
-      if (e.lo[a] - s_lo > cut) cut = e.lo[a] - s_lo, x_s = e.lo[a], axis = a;
-    }
+    bool hi_cut = false;
+    const double cut = surface_cut(i, ijk, axis, hi_cut, x_s);
     if (cut <= kSurfaceCut * grid_.h()) return false;
     p_D = -linear_.gradient_at_node(grid_, i)[axis] * (x_s - grid_.axis(axis).node_x[ijk[axis]]);
     return true;
+  }
+  /// The nearest node with a well-posed linear fit from node i inward (towards the water) along
+  /// the axis of its largest support cut, within S - 1 steps (the nodes that share points with
+  /// i); i itself if there is none (no cut, or a sheet of water thinner than the supports: the
+  /// node keeps the Order-0 fit, p_D = 0 at a surface node).
+  std::size_t inward_well_posed(std::size_t i, const std::array<int, Dim>& ijk) const {
+    int axis = -1;
+    bool hi_cut = false;
+    surface_cut(i, ijk, axis, hi_cut);
+    if (axis < 0) return i;
+    const auto& nn = grid_.nodes_per_axis();
+    std::size_t stride = 1;
+    for (int a = 0; a < axis; ++a) stride *= static_cast<std::size_t>(nn[a]);
+    std::size_t k = i;
+    for (int j = ijk[axis], step = 1; step < S; ++step) {
+      j += hi_cut ? -1 : 1;
+      if (j < 0 || j >= nn[axis]) break;
+      k = hi_cut ? k - stride : k + stride;
+      if (linear_.well_posed(k)) return k;
+    }
+    return i;
+  }
+  /// The largest cut of node i's support by the water's extent (e.lo / e.hi): its length [m],
+  /// axis, side (hi_cut: the water stops short of the support's upper end) and the extent x_s.
+  double surface_cut(std::size_t i, const std::array<int, Dim>& ijk, int& axis, bool& hi_cut) const {
+    double x_s = 0.0;
+    return surface_cut(i, ijk, axis, hi_cut, x_s);
+  }
+  double surface_cut(std::size_t i, const std::array<int, Dim>& ijk, int& axis, bool& hi_cut, double& x_s) const {
+    const NodeExtra& e = node_[i];
+    double cut = 0.0;
+    axis = -1;
+    for (int a = 0; a < Dim; ++a) {
+      const auto [s_lo, s_hi] = support_range(a, ijk[a]);
+      if (s_hi - e.hi[a] > cut) cut = s_hi - e.hi[a], x_s = e.hi[a], axis = a, hi_cut = true;
+      if (e.lo[a] - s_lo > cut) cut = e.lo[a] - s_lo, x_s = e.lo[a], axis = a, hi_cut = false;
+    }
+    return cut;
   }
   /// Support of basis j along axis a, clipped to the grid [m]: B-splines [t_j, t_{j+q+1}] on the
   /// clamped knot vector; linear and GIMP the hat's [x_j - h, x_j + h] (GIMP's wider reach of

@@ -9,9 +9,22 @@
 // linear field is reproduced exactly (also at nodes on a free surface, where a plain average is
 // biased towards the interior). A node whose H_I is near-singular (pivot ratio < 1e-8: too few
 // particles for the basis) falls back to Order 0.
+//
+// Well-posedness (Order 1). The fitted value at the node, a_I0, is the least-squares prediction
+// at d = 0 from points whose weighted centroid is mean(d) and covariance C (units h^2): its
+// sensitivity to the data is the leverage lambda = W (H_I^-1)_00 = 1 + mean(d)^T C^-1 mean(d)
+// (W = sum w N): a data error e becomes ~ e sqrt(lambda) at the node. A full support has
+// lambda ~ 1, the clamped boundary node of a bspline3 support ~ 9; a node whose points lie in a
+// thin strip at the edge of its support (the water at a free surface covering one row of points
+// of a B-spline support) 1e3 - 1e4: its own gradient is noise and its a_I0 an amplified
+// extrapolation (docs/formulations.md, "Free-surface nodes with an ill-posed fit"). Above
+// kMaxLeverage = 100 (node value error at most 10 x the data's) the node falls back to Order 0,
+// unless the caller imposes a gradient (impose_gradient), with which only the value is fitted,
+// a_I0 = mean_w(f - grad . (x - x_I)): a linear field with that gradient is still reproduced.
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -37,7 +50,11 @@ class NodeProjection {
            const std::vector<shape::ShapeData<Dim, S>>& sd, const std::vector<Vec<Dim>>& x, Weight&& weight,
            Value&& value) {
     if (blocks_.size() != g.num_nodes() * NB) blocks_.assign(g.num_nodes() * NB, 0.0);
-    g.parallel_for_each_node(box, [&](std::size_t i, const auto&) { std::fill_n(block(i), NB, 0.0); });
+    if (well_posed_.size() != g.num_nodes()) well_posed_.assign(g.num_nodes(), 0);
+    g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
+      std::fill_n(block(i), NB, 0.0);
+      well_posed_[i] = 0;
+    });
     schedule.run([&](int p) {
       const double w = weight(p), f = value(p);
       if (w == 0.0) return;
@@ -63,8 +80,18 @@ class NodeProjection {
         Eigen::LDLT<MatQ> ldlt(H);
         const double cond = ldlt.vectorD().cwiseAbs().minCoeff() / ldlt.vectorD().cwiseAbs().maxCoeff();
         VecQ a = VecQ::Zero();
-        if (ldlt.info() == Eigen::Success && cond > 1e-8) a = ldlt.solve(rhs);
+        bool ok = ldlt.info() == Eigen::Success && cond > 1e-8;
+        if (ok) {
+          // Leverage of the node: lambda = W (H^-1)_00 = 1 + mean(d)^T C^-1 mean(d) (C the points'
+          // weighted covariance of d): a data error e becomes ~ e sqrt(lambda) in a_I0.
+          VecQ e0 = VecQ::Zero();
+          e0[0] = 1.0;
+          const double lambda = blk[0] * ldlt.solve(e0)[0];
+          ok = lambda <= kMaxLeverage;
+        }
+        if (ok) a = ldlt.solve(rhs);
         else a[0] = rhs[0] / blk[0];
+        well_posed_[i] = ok;
         rhs = a;
       } else {
         rhs[0] /= blk[0];
@@ -84,6 +111,28 @@ class NodeProjection {
       if (has(i))
         for (int a = 0; a < Dim; ++a) grad[a] = blocks_[i * NB + NH + 1 + a] / g.h();
     return grad;
+  }
+  /// Whether node i's points determine its linear fit (Order 1: leverage <= kMaxLeverage; Order 0:
+  /// any weight).
+  bool well_posed(std::size_t i) const {
+    if constexpr (Order == 0) return has(i);
+    return well_posed_[i] != 0;
+  }
+  /// For a node whose fit is not well posed (fell back to Order 0): imposes the gradient `grad`
+  /// [unit of f per m] and refits only the value, a_I0 = sum_p w N (f_p - grad . (x_p - x_I)) /
+  /// sum_p w N (the first row of H_I holds sum w N and sum w N d). A linear field with that
+  /// gradient is reproduced exactly. Call once per node after fit(), before the values are read.
+  void impose_gradient(const Grid<Dim>& g, std::size_t i, const Vec<Dim>& grad) {
+    if constexpr (Order == 1) {
+      double* blk = block(i);
+      if (!has(i) || well_posed_[i]) return;
+      double shift = 0.0;
+      for (int a = 0; a < Dim; ++a) {
+        shift += grad[a] * g.h() * blk[1 + a] / blk[0];  // grad . mean_w(x - x_I)
+        blk[NH + 1 + a] = grad[a] * g.h();
+      }
+      blk[NH] -= shift;
+    }
   }
   /// The projected field at a point with shape data sd at x (only nodes with weight count).
   double at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x) const {
@@ -121,7 +170,10 @@ class NodeProjection {
     });
   }
 
+  static constexpr double kMaxLeverage = 100.0;  // largest leverage W (H^-1)_00 of an own linear fit
+
   std::vector<double> blocks_;  // per node: packed upper triangle of H_I, then rhs -> a_I
+  std::vector<std::uint8_t> well_posed_;  // per node: 1 when the last fit was well posed (Order 1)
 };
 
 }  // namespace swmpm
