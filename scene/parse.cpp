@@ -1029,12 +1029,13 @@ const Table& solver_table() {
            .meaning = "Local (Cundall) damping coefficient."},
           {.name = "kinematics", .type = Type::choice, .def = "finite-strain",
            .values = {"small-strain", "finite-strain"}, .meaning = "Strain measure of the update."},
-          {.name = "continuity", .type = Type::choice, .def = "non-conservative",
+          {.name = "continuity", .type = Type::choice,
            .values = {"non-conservative", "conservative"},
            .meaning = "Two-phase mixture volume balance: `non-conservative` (1 − n) div v_s + n div v_w "
                       "(the seeds' eq. 9 / eq. 60) or `conservative` div[(1 − n) v_s + n v_w], which adds "
-                      "(v_w − v_s)·grad n (semi-implicit formulations only; needed at large strain, B2; see "
-                      "docs/formulations.md)."},
+                      "(v_w − v_s)·grad n (needed at large strain, B2; see docs/formulations.md); default by "
+                      "formulation: `conservative` (semi-implicit, the only ones that implement it), "
+                      "`non-conservative` otherwise."},
           {.name = "checkpoint_every", .type = Type::integer, .def = 50, .range = at_least(1),
            .meaning = "Steps between in-memory snapshots of the last good state."},
           {.name = "stabilisation", .type = Type::object,
@@ -1295,8 +1296,10 @@ class SceneParser {
     parse_output(top.ok("output") ? top.get("output") : json::object(), top.at("output"));
     parse_solver(top.ok("solver") ? top.get("solver") : json::object(), top.at("solver"));
     if (top.ok("formulation")) resolve_formulation(top.str("formulation"), top.at("formulation"));
-    if (s_.solver.continuity == "conservative" && s_.formulation != Formulation::semi_implicit_single_point &&
-        s_.formulation != Formulation::semi_implicit_double_point)
+    const bool semi_implicit = s_.formulation == Formulation::semi_implicit_single_point ||
+                               s_.formulation == Formulation::semi_implicit_double_point;
+    if (s_.solver.continuity.empty()) s_.solver.continuity = semi_implicit ? "conservative" : "non-conservative";
+    if (s_.solver.continuity == "conservative" && !semi_implicit)
       c_.error(top.at("solver") + "/continuity",
                "got \"conservative\", which the semi-implicit formulations implement; this scene's formulation "
                "uses the non-conservative form (remove the key)");
@@ -2083,7 +2086,7 @@ class SceneParser {
     sv.flip = o.num("flip", 0.99);
     sv.damping = o.num("damping");
     sv.kinematics = o.str("kinematics", "finite-strain");
-    sv.continuity = o.str("continuity", "non-conservative");
+    sv.continuity = o.str("continuity", "");  // "": the formulation's default (after resolve_formulation)
     sv.checkpoint_every = static_cast<int>(o.num("checkpoint_every", 50.0));
     const Obj st = check_object(c_, o.ok("stabilisation") ? o.get("stabilisation") : json::object(),
                                 o.at("stabilisation"), {&stabilisation_table()});
