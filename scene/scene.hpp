@@ -172,8 +172,8 @@ struct Solver {
   double flip = 0.99;            // FLIP fraction of the FLIP/PIC blend (1 = pure FLIP)
   double damping = 0.0;          // local (Cundall) damping coefficient, 0..1
   std::string kinematics = "finite-strain";  // small-strain | finite-strain
-  std::string continuity = "non-conservative";  // non-conservative | conservative (mixture volume balance; parse
-                                                // sets the formulation's default: conservative for semi-implicit)
+  std::string continuity;  // non-conservative | conservative (mixture volume balance); "" = the formulation's
+                           // default (conservative for semi-implicit), which parse resolves
   Stabilisation stabilisation;
   int checkpoint_every = 50;     // steps between in-memory snapshots of the last good state
 };

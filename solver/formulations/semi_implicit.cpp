@@ -100,7 +100,7 @@ class SemiImplicit final : public Formulation<Dim> {
         material_particles_(group_by_material(state.solid, s.materials.size())),
         poisson_(grid_),
         fbar_(s, grid_) {
-    conservative_ = s.solver.continuity == "conservative";
+    conservative_ = s.solver.continuity != "non-conservative";  // "" (unset): this formulation's default
     const auto& st = s.solver.stabilisation;
     if (st.pressure == "node-remap") remap_ = Remap::node;
     else if (st.pressure == "mfvp-linear") remap_ = Remap::linear;
@@ -651,7 +651,8 @@ class SemiImplicit final : public Formulation<Dim> {
   std::size_t inward_well_posed(std::size_t i, const std::array<int, Dim>& ijk) const {
     int axis = -1;
     bool hi_cut = false;
-    surface_cut(i, ijk, axis, hi_cut);
+    double x_s = 0.0;
+    surface_cut(i, ijk, axis, hi_cut, x_s);
     if (axis < 0) return i;
     const auto& nn = grid_.nodes_per_axis();
     std::size_t stride = 1;
@@ -667,10 +668,6 @@ class SemiImplicit final : public Formulation<Dim> {
   }
   /// The largest cut of node i's support by the water's extent (e.lo / e.hi): its length [m],
   /// axis, side (hi_cut: the water stops short of the support's upper end) and the extent x_s.
-  double surface_cut(std::size_t i, const std::array<int, Dim>& ijk, int& axis, bool& hi_cut) const {
-    double x_s = 0.0;
-    return surface_cut(i, ijk, axis, hi_cut, x_s);
-  }
   double surface_cut(std::size_t i, const std::array<int, Dim>& ijk, int& axis, bool& hi_cut, double& x_s) const {
     const NodeExtra& e = node_[i];
     double cut = 0.0;

@@ -136,11 +136,12 @@ class NorSand final : public MaterialModel<Dim> {
   /// repeated in 64 or 256 equal sub-steps of the same velocity gradient (F_n → F_{n+1} through
   /// ΔF(L, dt/m)^k), each a full return; the modified F-bar shift applies to the first only.
   bool update(ParticleSet<Dim>& ps, int p, double dt) const {
+    const double shift = ps.ev_shift.empty() ? 0.0 : ps.ev_shift[p];
+    if (update_once(ps, p, dt, shift)) return true;
+    // update_once writes σ, the state and ε_p only on success: they still hold step n here.
     const Sym sigma_n = ps.sigma[p];
     const MaterialState state_n = ps.state[p];
     const double eps_p_n = ps.eps_p[p];
-    const double shift = ps.ev_shift.empty() ? 0.0 : ps.ev_shift[p];
-    if (update_once(ps, p, dt, shift)) return true;
     const Mat3 F_end = ps.F[p];
     Mat3 dF = Mat3::Identity();
     dF.template topLeftCorner<Dim, Dim>() = transfer::deformation_increment<Dim>(ps.L[p], dt);
