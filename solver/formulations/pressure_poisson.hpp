@@ -91,7 +91,10 @@ class PressurePoisson {
     });
   }
 
-  /// Row i of L over the stencil (slot St::slot(d) holds L_{i, i + d}).
+  /// Row i of L over the stencil: slot St::slot(d) holds L_{i, i + d} for the offsets whose flat
+  /// step is >= 0 only (slots >= K / 2, column i of the lower triangle); L being symmetric, the
+  /// other half is read from the neighbour's row (L_{i, i + d} = L_{i + d, i}). Callers add into
+  /// those slots only.
   double* row(std::size_t i) { return stencil_.data() + i * K; }
   double& rhs(std::size_t i) { return rhs_[i]; }
   /// Sets a node's role; a prescribed node takes the increment `value`.
@@ -132,11 +135,13 @@ class PressurePoisson {
     for (int j = 0; j < n; ++j) {
       const std::size_t I = static_cast<std::size_t>(unknowns_[j]);
       double r = rhs_[I];
-      const double* row = stencil_.data() + I * K;
       for (int k = 0; k < K; ++k) {  // move the prescribed neighbours' known increments to the right
-        if (row[k] == 0.0) continue;
         const long J = static_cast<long>(I) + step_[k];
-        if (role_[J] == prescribed) r -= row[k] * dp_[J];
+        if (J < 0 || J >= static_cast<long>(role_.size())) continue;  // off the grid (L_IJ = 0)
+        // L_IJ from the row holding it: I's own for J >= I, else J's slot of the offset -d.
+        const double L_IJ = step_[k] >= 0 ? stencil_[I * K + k] : stencil_[static_cast<std::size_t>(J) * K + (K - 1 - k)];
+        if (L_IJ == 0.0) continue;
+        if (role_[J] == prescribed) r -= L_IJ * dp_[J];
       }
       b_[j] = r;
     }

@@ -738,7 +738,9 @@ class SemiImplicit final : public Formulation<Dim> {
     for (int r = 0; r < NP; ++r) {
       double* lrow = poisson_.row(node[r]);
       const Vec<Dim> g = cl * grad[r];
-      for (int k = 0; k < NP; ++k) lrow[lap_slot_[r][k]] += g.dot(grad[k]);
+      // L is symmetric: only the pairs k >= r (node k at or after node r in flat index: the
+      // lower triangle, which the Poisson rows store), 45 of GIMP's 81 in 2D.
+      for (int k = r; k < NP; ++k) lrow[lap_slot_[r][k]] += g.dot(grad[k]);
       if (N[r] == 0.0) continue;
       Vec<Dim>* srow = D_solid_.data() + node[r] * KD;
       Vec<Dim>* wrow = D_water_.data() + node[r] * KD;
