@@ -20,6 +20,7 @@
 #include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 #include "solver/formulation.hpp"
+#include "solver/formulations/registry.hpp"
 #include "solver/materials/material.hpp"
 #include "solver/output/monitors.hpp"
 #include "solver/output/particle_io.hpp"
@@ -93,6 +94,7 @@ class Runner {
       state_.surfaces = surface_samples_from_cloud<Dim>(scene::read_vtu(surfaces.string()), surfaces.string());
     }
     auto formulation = make_formulation<Dim>(scene_, state_);
+    reporters_ = make_materials<Dim>(scene_);  // frames' material state fields (pure functions of the particles)
     threads_ = omp_get_max_threads();
 
     const fs::path out = dir_ / "output";
@@ -382,7 +384,9 @@ class Runner {
     const int k = frame_count_++;
     char name[64];
     std::snprintf(name, sizeof name, "solid_%06d.vtu", k);
-    scene::write_vtu((dir_ / "output" / name).string(), particles_to_cloud(state_.solid));
+    scene::PointCloud solid = particles_to_cloud(state_.solid);
+    add_material_reports(solid, state_.solid, reporters_);
+    scene::write_vtu((dir_ / "output" / name).string(), solid);
     frames_.push_back({t, "solid", 0, name});
     if (state_.fluid.size()) {
       std::snprintf(name, sizeof name, "fluid_%06d.vtu", k);
@@ -399,6 +403,7 @@ class Runner {
   State<Dim> state_;
   int threads_ = 1;
   std::vector<scene::PvdEntry> frames_;  // one entry per phase and frame
+  std::vector<std::unique_ptr<MaterialModel<Dim>>> reporters_;  // per scene material, for add_material_reports
   int frame_count_ = 0;
   double last_good_frame_time_ = 0.0;
 };

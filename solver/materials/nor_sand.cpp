@@ -120,12 +120,17 @@ class NorSand final : public MaterialModel<Dim> {
     return ns::stored_energy(p_, el) * ps.V0[p];
   }
 
-  std::vector<std::string> report_names() const override { return {"specific_volume", "state_parameter"}; }
-  /// v = J v0 and ψ = v − v_c(p) with the Kirchhoff p = J p_σ (NS6; NaN when p <= 0: gas-like).
+  std::vector<std::string> report_names() const override {
+    return {"specific_volume", "state_parameter", "image_pressure"};
+  }
+  /// v = J v0, ψ = v − v_c(p) with the Kirchhoff p = J p_σ (NS6; NaN when p <= 0: gas-like) and
+  /// π_i [Pa] (NaN while unset: before the first plastic step).
   void report_values(const ParticleSet<Dim>& ps, int p, std::span<double> out) const override {
     const double J = ps.F[p].determinant(), v = J * p_.v0, pk = J * mean_stress(ps.sigma[p]);
     out[0] = v;
     out[1] = pk > 0.0 ? v - p_.v_csl(pk) : std::nan("");
+    const double pi = ps.state.size() == ps.size() ? ns::State::load(ps.state[p]).pi : 0.0;
+    out[2] = pi > 0.0 ? pi : std::nan("");
   }
 
  private:

@@ -1,6 +1,8 @@
 #include "solver/output/particle_io.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace swmpm {
@@ -183,7 +185,40 @@ template SurfaceSamples<2> surface_samples_from_cloud<2>(const scene::PointCloud
 template SurfaceSamples<3> surface_samples_from_cloud<3>(const scene::PointCloud&, const std::string&);
 template ParticleSet<2> particles_from_cloud<2>(const scene::PointCloud&, const std::string&);
 template ParticleSet<3> particles_from_cloud<3>(const scene::PointCloud&, const std::string&);
+template <int Dim>
+void add_material_reports(scene::PointCloud& c, const ParticleSet<Dim>& ps,
+                          const std::vector<std::unique_ptr<MaterialModel<Dim>>>& models) {
+  // Per material: the cloud array of each of its report names (shared when two materials report
+  // the same name).
+  std::vector<std::vector<scene::PointArray*>> arrays(models.size());
+  for (std::size_t k = 0; k < models.size(); ++k) {
+    if (!models[k]) continue;
+    for (const auto& name : models[k]->report_names()) {
+      scene::PointArray* a = nullptr;
+      for (auto& existing : c.arrays)
+        if (existing.name == name) a = &existing;
+      if (!a) {
+        a = &c.add(name, 1);
+        std::fill(a->values.begin(), a->values.end(), std::numeric_limits<double>::quiet_NaN());
+      }
+      arrays[k].push_back(a);
+    }
+  }
+  std::vector<double> values;
+  for (std::size_t p = 0; p < ps.size(); ++p) {
+    const std::size_t k = static_cast<std::size_t>(ps.material[p]);
+    if (k >= models.size() || arrays[k].empty()) continue;
+    values.assign(arrays[k].size(), 0.0);
+    models[k]->report_values(ps, static_cast<int>(p), values);
+    for (std::size_t j = 0; j < values.size(); ++j) arrays[k][j]->values[p] = values[j];
+  }
+}
+
 template scene::PointCloud particles_to_cloud<2>(const ParticleSet<2>&);
 template scene::PointCloud particles_to_cloud<3>(const ParticleSet<3>&);
+template void add_material_reports<2>(scene::PointCloud&, const ParticleSet<2>&,
+                                      const std::vector<std::unique_ptr<MaterialModel<2>>>&);
+template void add_material_reports<3>(scene::PointCloud&, const ParticleSet<3>&,
+                                      const std::vector<std::unique_ptr<MaterialModel<3>>>&);
 
 }  // namespace swmpm

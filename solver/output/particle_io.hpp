@@ -2,7 +2,11 @@
 // section "Particle files and frames".
 #pragma once
 
+#include <memory>
+#include <vector>
+
 #include "scene/pointcloud.hpp"
+#include "solver/materials/material.hpp"
 #include "solver/particles/particles.hpp"
 
 namespace swmpm {
@@ -18,6 +22,14 @@ SurfaceSamples<Dim> surface_samples_from_cloud(const scene::PointCloud& c, const
 /// A frame: the seeded arrays plus displacement, stress invariants and J.
 template <int Dim>
 scene::PointCloud particles_to_cloud(const ParticleSet<Dim>& ps);
+
+/// Adds to a frame the state quantities the particles' material models report
+/// (MaterialModel::report_names: Nor-Sand's specific_volume, state_parameter, image_pressure), one
+/// array per name over all particles, NaN for particles whose material does not report it.
+/// `models` is indexed by scene material (nullptr for fluids). Frames only, not the time loop.
+template <int Dim>
+void add_material_reports(scene::PointCloud& c, const ParticleSet<Dim>& ps,
+                          const std::vector<std::unique_ptr<MaterialModel<Dim>>>& models);
 
 /// A frame of double-point water points: id, mass, volume, velocity, displacement, pore_pressure,
 /// porosity, material, body.

@@ -423,8 +423,8 @@ TEST(NorSand, NeedsFiniteStrainAndMaterialState) {
   ps.resize(1);
   const std::vector<int> ids{0};
   EXPECT_THROW(model->update_stress(ps, ids, 1e-3), std::logic_error);
-  // The report columns of swmpm element.
-  EXPECT_EQ(model->report_names(), (std::vector<std::string>{"specific_volume", "state_parameter"}));
+  // The report columns of swmpm element and the fields of the frames.
+  EXPECT_EQ(model->report_names(), (std::vector<std::string>{"specific_volume", "state_parameter", "image_pressure"}));
 }
 
 TEST(NorSand, ElasticPhaseLeavesTheImagePressureUnsetUntilPlasticityStarts) {

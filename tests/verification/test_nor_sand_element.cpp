@@ -141,7 +141,7 @@ TEST(NorSandElement, CommandLineColumns) {
   ASSERT_EQ(r.status, 0) << r.err;
   const auto table = swmpm::post::read_csv(csv);
   EXPECT_EQ(table.names, (std::vector<std::string>{"axial_strain", "p", "q", "volumetric_strain", "specific_volume",
-                                                   "state_parameter", "excess_pore_pressure", "p0"}));
+                                                   "state_parameter", "image_pressure", "excess_pore_pressure", "p0"}));
   EXPECT_EQ(table.column("p0").size(), 42u);
   EXPECT_EQ(table.column("p0").back(), 300e3);
   EXPECT_TRUE(std::filesystem::exists(png));
@@ -187,4 +187,20 @@ TEST(NorSandElement, DryMpmSceneRuns) {
               rj["steps"].get<int>(), v_max, worst);
   EXPECT_LT(v_max, 0.05);
   EXPECT_LT(worst, 0.25);
+  // The frame carries the model's state fields: v = J v0 (J = volume_ratio), ψ = v − v_c(p) with
+  // the Kirchhoff p = J p′ and the CSL of the material (p in kPa), and π_i > 0 once plastic.
+  const auto& sv = frame.get("specific_volume", "frame").values;
+  const auto& psi = frame.get("state_parameter", "frame").values;
+  const auto& pi = frame.get("image_pressure", "frame").values;
+  const auto& J = frame.get("volume_ratio", "frame").values;
+  const auto& pm = frame.get("mean_effective_stress", "frame").values;
+  double worst_v = 0.0, worst_psi = 0.0;
+  for (std::size_t p = 0; p < frame.size(); ++p) {
+    worst_v = std::max(worst_v, std::abs(sv[p] - 1.6 * J[p]));
+    const double v_c = 1.892 - 0.02 * std::log(J[p] * pm[p] / 1e3);
+    worst_psi = std::max(worst_psi, std::abs(psi[p] - (sv[p] - v_c)));
+    EXPECT_GT(pi[p], 0.0) << p;
+  }
+  EXPECT_LT(worst_v, 1e-9);
+  EXPECT_LT(worst_psi, 1e-6);
 }
