@@ -1036,6 +1036,11 @@ const Table& solver_table() {
                       "(v_w − v_s)·grad n (needed at large strain, B2; see docs/formulations.md); default by "
                       "formulation: `conservative` (semi-implicit, the only ones that implement it), "
                       "`non-conservative` otherwise."},
+          {.name = "escaped_water", .type = Type::choice, .def = "keep", .values = {"keep", "remove"},
+           .meaning = "Double-point only: water points that have left the soil (the soil's volume fraction "
+                      "interpolated at the point below one half) stay as free water (`keep`) or leave the "
+                      "run (`remove`: an outflow through a drained free surface into a reservoir that is not "
+                      "modelled, as in B2; see docs/formulations.md)."},
           {.name = "checkpoint_every", .type = Type::integer, .def = 50, .range = at_least(1),
            .meaning = "Steps between in-memory snapshots of the last good state."},
           {.name = "stabilisation", .type = Type::object,
@@ -1303,6 +1308,10 @@ class SceneParser {
       c_.error(top.at("solver") + "/continuity",
                "got \"conservative\", which the semi-implicit formulations implement; this scene's formulation "
                "uses the non-conservative form (remove the key)");
+    if (s_.solver.escaped_water == "remove" && s_.formulation != Formulation::semi_implicit_double_point)
+      c_.error(top.at("solver") + "/escaped_water",
+               "got \"remove\", which applies to the water points of semi-implicit-double-point; this scene's "
+               "formulation has none (remove the key)");
     if (top.ok("initialisation")) parse_initialisation(top.get("initialisation"), top.at("initialisation"), top);
     if (s_.solver.stabilisation.fbar_patch == 0.0)
       s_.solver.stabilisation.fbar_patch = default_fbar_patch(s_.grid.shape_function);
@@ -2087,6 +2096,7 @@ class SceneParser {
     sv.damping = o.num("damping");
     sv.kinematics = o.str("kinematics", "finite-strain");
     sv.continuity = o.str("continuity", "");  // "": the formulation's default (after resolve_formulation)
+    sv.escaped_water = o.str("escaped_water", "keep");
     sv.checkpoint_every = static_cast<int>(o.num("checkpoint_every", 50.0));
     const Obj st = check_object(c_, o.ok("stabilisation") ? o.get("stabilisation") : json::object(),
                                 o.at("stabilisation"), {&stabilisation_table()});
@@ -2438,6 +2448,7 @@ nlohmann::json to_json(const Scene& s) {
                  {"damping", sv.damping},
                  {"kinematics", sv.kinematics},
                  {"continuity", sv.continuity},
+                 {"escaped_water", sv.escaped_water},
                  {"checkpoint_every", sv.checkpoint_every},
                  {"stabilisation",
                   {{"strain_smoothing", sv.stabilisation.strain_smoothing},

@@ -174,6 +174,9 @@ struct Solver {
   std::string kinematics = "finite-strain";  // small-strain | finite-strain
   std::string continuity;  // non-conservative | conservative (mixture volume balance); "" = the formulation's
                            // default (conservative for semi-implicit), which parse resolves
+  // Double-point water points that have left the soil (outside its volume, past a drained free
+  // surface): keep | remove (an outflow into an unmodelled reservoir; docs/formulations.md)
+  std::string escaped_water = "keep";
   Stabilisation stabilisation;
   int checkpoint_every = 50;     // steps between in-memory snapshots of the last good state
 };

@@ -87,6 +87,14 @@ class Formulation {
   /// Cells holding at least one particle, at the last step.
   virtual std::size_t active_cells(const State<Dim>& s) const = 0;
   const StageTimes& stage_times() const { return times_; }
+  /// Run totals a formulation reports beside the stage times (run.json "counters", the log's last
+  /// lines): name, value, unit. Empty unless something happened (double-point: escaped water).
+  struct Counter {
+    std::string name;
+    double value;
+    std::string unit;
+  };
+  virtual std::vector<Counter> counters() const { return {}; }
 
  protected:
   StageTimes times_;

@@ -327,6 +327,12 @@ class Runner {
     const auto& st = formulation->stage_times();
     for (std::size_t k = 0; k < st.names.size(); ++k) stages[st.names[k]] = st.seconds[k];
     rj["stage_seconds"] = stages;
+    const auto counters = formulation->counters();
+    if (!counters.empty()) {
+      nlohmann::ordered_json cj;
+      for (const auto& c : counters) cj[c.name] = c.value;
+      rj["counters"] = cj;
+    }
     rj["software_version"] = version;
     rj["git_hash"] = git_hash;
     std::ofstream(dir_ / "run.json") << rj.dump(2) << "\n";
@@ -343,6 +349,7 @@ class Runner {
     for (std::size_t k = 0; k < st.names.size(); ++k)
       split << " " << st.names[k] << " " << fmt(100.0 * st.seconds[k] / std::max(total, 1e-300), 3) << "%";
     log_.line(split.str());
+    for (const auto& c : counters) log_.line(c.name + ": " + fmt(c.value, 6) + (c.unit.empty() ? "" : " " + c.unit));
     return status == "completed" ? 0 : (status == "diverged" ? 3 : 4);
   }
 

@@ -101,6 +101,7 @@ class SemiImplicit final : public Formulation<Dim> {
         poisson_(grid_),
         fbar_(s, grid_) {
     conservative_ = s.solver.continuity != "non-conservative";  // "" (unset): this formulation's default
+    remove_escaped_ = double_point_ && s.solver.escaped_water == "remove";
     const auto& st = s.solver.stabilisation;
     if (st.pressure == "node-remap") remap_ = Remap::node;
     else if (st.pressure == "mfvp-linear") remap_ = Remap::linear;
@@ -273,6 +274,7 @@ class SemiImplicit final : public Formulation<Dim> {
       if (m_bad >= 0) st.health.report(m_bad, "solid", "stress update failed (" + materials_[k]->name() + ")");
     }
     if (tie_) tie_water_points(st);
+    else if (remove_escaped_) remove_escaped_water(ws);
     lap("stress and porosity");
   }
 
@@ -379,6 +381,7 @@ class SemiImplicit final : public Formulation<Dim> {
     Vec<Dim> hi = Vec<Dim>::Constant(-std::numeric_limits<double>::infinity());
     double w_raw = 0.0;     // double-point: sum S rho_w V (M_w = n_I w_raw, eq. 50)
     double n = 1.0, k = 0.0;            // nodal porosity and conductivity
+    double soil_volume = 0.0;           // double-point: sum S V of the soil points (escaped water)
     double drag = 0.0;                  // Q_I dt (kg)
   };
 
@@ -447,6 +450,7 @@ class SemiImplicit final : public Formulation<Dim> {
         auto& e = node_[i];
         e.mn += N * m * n;
         e.mk += N * m * k;
+        e.soil_volume += N * V;
         if (sp) {
           auto& w = water_.acc[i];
           w.m += N * mf;
@@ -956,6 +960,48 @@ class SemiImplicit final : public Formulation<Dim> {
     return bad == transfer::no_particle ? -1 : bad;
   }
 
+  /// solver.escaped_water = remove (double-point): the water points outside the soil leave the
+  /// run — an outflow through the drained free surface into a reservoir that is not modelled
+  /// (B2: the water squeezed out of the top would otherwise float above the soil as a sheet
+  /// thinner than a cell, whose surface nodes take p = 0 and cut the soil off its drained top).
+  /// "Outside": the soil's volume fraction interpolated at the point,
+  ///   phi(x_w) = sum_I S_I(x_w) min(1, sum_sp S_I V_sp / int S_I dx),
+  /// is below one half (the soil's surface is where phi = 1/2). Shape data and nodal sums of the
+  /// start of the step; removal keeps the order of the remaining points (thread-independent).
+  void remove_escaped_water(ParticleSet<Dim>& ws) {
+    const long n = static_cast<long>(ws.size());
+    escaped_.resize(ws.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      double phi = 0.0;
+      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        phi += N * std::min(1.0, node_[i].soil_volume / support_[i]);
+      });
+      escaped_[p] = phi < 0.5;
+    }
+    const std::size_t n0 = ws.size();
+    std::size_t removed = 0;
+    for (std::size_t p = 0; p < n0; ++p)
+      if (escaped_[p]) ++removed, escaped_mass_ += ws.m[p];
+    if (removed == 0) return;
+    escaped_points_ += static_cast<long>(removed);
+    ws.for_each_field([&](auto& f) {
+      if (f.size() != n0) return;  // fields the water points do not use
+      std::size_t k = 0;
+      for (std::size_t p = 0; p < n0; ++p)
+        if (!escaped_[p]) f[k++] = f[p];
+      f.resize(k);
+    });
+  }
+
+ public:
+  std::vector<typename Formulation<Dim>::Counter> counters() const override {
+    if (!remove_escaped_) return {};
+    return {{"escaped_water_points", static_cast<double>(escaped_points_), "water points removed (solver.escaped_water)"},
+            {"escaped_water_mass", escaped_mass_, "kg (per metre in 2D)"}};
+  }
+
+ private:
   bool double_point_;
   Grid<Dim> grid_;
   GridBoundary<Dim> bcs_solid_, bcs_fluid_;
@@ -967,7 +1013,11 @@ class SemiImplicit final : public Formulation<Dim> {
   std::vector<Permeability> perm_;          // per solid material (the initialisation phase's while it runs)
   std::vector<Permeability> scene_perm_;    // per solid material, as the scene gives it
   bool tie_ = false;                        // initialisation: water points follow their soil points
-  bool conservative_ = false;                // solver.continuity = conservative (solve_pressure)
+  bool conservative_ = false;
+  bool remove_escaped_ = false;              // solver.escaped_water = remove (double-point)
+  std::vector<char> escaped_;                // per water point, this step (reused)
+  long escaped_points_ = 0;
+  double escaped_mass_ = 0.0;                // kg (per metre in 2D)                // solver.continuity = conservative (solve_pressure)
   bool fast_drainage_ = false;              // initialisation with its own permeability is running
   std::vector<std::int64_t> partner_;       // per water-point id: the coincident soil point's id (-1: none)
   std::vector<int> fluid_of_material_;      // per solid material: its pore water's material

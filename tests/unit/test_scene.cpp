@@ -466,6 +466,12 @@ TEST(SceneErrors, UnknownEnumerationValuesListTheValidOnes) {
   json s = scene_3d();
   s["solver"]["stabilisation"]["pressure"] = "mfvp";
   EXPECT_TRUE(reports(s, "/solver/stabilisation/pressure", "mfvp-constant, mfvp-linear"));
+  json t = scene_2d();
+  t["solver"]["escaped_water"] = "drain";
+  EXPECT_TRUE(reports(t, "/solver/escaped_water", "expected one of: keep, remove"));
+  json u = scene_2d();  // only the double-point water points can leave
+  u["solver"]["escaped_water"] = "remove";
+  EXPECT_TRUE(reports(u, "/solver/escaped_water", "applies to the water points of semi-implicit-double-point"));
 }
 
 TEST(SceneErrors, MissingRequiredKeys) {
