@@ -4,6 +4,8 @@
 // grid 120 cells wide, so the scatter schedule has many stripes to share between the threads.
 #include <gtest/gtest.h>
 
+#include <initializer_list>
+
 #include "support/run_helpers.hpp"
 
 namespace {
@@ -28,6 +30,20 @@ nlohmann::json block_scene() {
   })");
 }
 
+/// Two frames hold the same points at bitwise equal positions and `arrays` bitwise equal.
+void expect_identical_frames(const swmpm::scene::PointCloud& f1, const swmpm::scene::PointCloud& f2,
+                             std::initializer_list<const char*> arrays) {
+  ASSERT_EQ(f1.size(), f2.size());
+  for (std::size_t p = 0; p < f1.size(); ++p)
+    for (int a = 0; a < 3; ++a) ASSERT_EQ(f1.points[p][a], f2.points[p][a]) << "point " << p;
+  for (const char* field : arrays) {
+    const auto& a1 = f1.get(field, "1").values;
+    const auto& a2 = f2.get(field, "2").values;
+    ASSERT_EQ(a1.size(), a2.size()) << field;
+    for (std::size_t k = 0; k < a1.size(); ++k) ASSERT_EQ(a1[k], a2[k]) << field << " entry " << k;
+  }
+}
+
 }  // namespace
 
 TEST(Threads, OneAndTwoThreadsGiveIdenticalResults) {
@@ -37,14 +53,7 @@ TEST(Threads, OneAndTwoThreadsGiveIdenticalResults) {
   const std::string m2 = swmpm::testing::read_text(two + "/monitors.csv");
   ASSERT_GT(m1.size(), 1000u);
   EXPECT_EQ(m1, m2);
-  const auto f1 = swmpm::testing::last_frame(one);
-  const auto f2 = swmpm::testing::last_frame(two);
-  ASSERT_EQ(f1.size(), f2.size());
-  for (std::size_t p = 0; p < f1.size(); ++p)
-    for (int a = 0; a < 3; ++a) ASSERT_EQ(f1.points[p][a], f2.points[p][a]) << "particle " << p;
-  const auto& s1 = f1.get("stress", "1").values;
-  const auto& s2 = f2.get("stress", "2").values;
-  for (std::size_t k = 0; k < s1.size(); ++k) ASSERT_EQ(s1[k], s2[k]) << "stress entry " << k;
+  expect_identical_frames(swmpm::testing::last_frame(one), swmpm::testing::last_frame(two), {"stress"});
   // The run did something: the loaded area moved.
   const auto run = swmpm::testing::load_json(one + "/run.json");
   EXPECT_EQ(run["status"], "completed");
@@ -69,14 +78,7 @@ TEST(Threads, ExplicitSinglePointOneAndTwoThreadsGiveIdenticalResults) {
   const auto f1 = swmpm::testing::last_frame(one);
   const auto f2 = swmpm::testing::last_frame(two);
   ASSERT_EQ(f1.size(), 4096u);
-  ASSERT_EQ(f1.size(), f2.size());
-  for (std::size_t p = 0; p < f1.size(); ++p)
-    for (int a = 0; a < 3; ++a) ASSERT_EQ(f1.points[p][a], f2.points[p][a]) << "particle " << p;
-  for (const char* field : {"pore_pressure", "stress"}) {
-    const auto& a1 = f1.get(field, "1").values;
-    const auto& a2 = f2.get(field, "2").values;
-    for (std::size_t k = 0; k < a1.size(); ++k) ASSERT_EQ(a1[k], a2[k]) << field << " entry " << k;
-  }
+  expect_identical_frames(f1, f2, {"pore_pressure", "stress"});
   // The run did something: the block is slumping and the pore pressure rising.
   double p_max = 0;
   for (double p : f1.get("pore_pressure", "1").values) p_max = std::max(p_max, p);
@@ -154,12 +156,6 @@ TEST(Threads, DoublePointEscapedWaterOneAndTwoThreadsGiveIdenticalResults) {
   EXPECT_GT(r1["counters"]["escaped_water_points"].get<double>(), 0.0);  // the removal happened
   EXPECT_EQ(r1["counters"], r2["counters"]);
   EXPECT_EQ(r1["particles"], r2["particles"]);
-  const auto f1 = swmpm::testing::last_frame(one, "fluid");
-  const auto f2 = swmpm::testing::last_frame(two, "fluid");
-  ASSERT_EQ(f1.size(), f2.size());
-  for (std::size_t p = 0; p < f1.size(); ++p)
-    for (int a = 0; a < 3; ++a) ASSERT_EQ(f1.points[p][a], f2.points[p][a]) << "water point " << p;
-  const auto& p1 = f1.get("pore_pressure", "1").values;
-  const auto& p2 = f2.get("pore_pressure", "2").values;
-  for (std::size_t k = 0; k < p1.size(); ++k) ASSERT_EQ(p1[k], p2[k]) << "water point " << k;
+  expect_identical_frames(swmpm::testing::last_frame(one, "fluid"), swmpm::testing::last_frame(two, "fluid"),
+                          {"pore_pressure", "velocity"});
 }
