@@ -381,7 +381,7 @@ class SemiImplicit final : public Formulation<Dim> {
     Vec<Dim> hi = Vec<Dim>::Constant(-std::numeric_limits<double>::infinity());
     double w_raw = 0.0;     // double-point: sum S rho_w V (M_w = n_I w_raw, eq. 50)
     double n = 1.0, k = 0.0;            // nodal porosity and conductivity
-    double soil_volume = 0.0;           // double-point: sum S V of the soil points (escaped water)
+    double soil_volume = 0.0;           // sum S V of the soil points (only with escaped_water = remove)
     double drag = 0.0;                  // Q_I dt (kg)
   };
 
@@ -432,6 +432,7 @@ class SemiImplicit final : public Formulation<Dim> {
   /// p_w = -p) are added at the nodes by the predictor, from the nodal p^t.
   void scatter_soil(const ParticleSet<Dim>& ps, const Vec<Dim>& b) {
     const bool sp = !double_point_;
+    const bool track_soil_volume = remove_escaped_;  // for remove_escaped_water
     schedule_.run([&](int p) {
       const double V = ps.V[p], n = ps.n[p], m = ps.m[p];
       const double n0 = 1.0 - (1.0 - n) * V / ps.V0[p];
@@ -450,7 +451,7 @@ class SemiImplicit final : public Formulation<Dim> {
         auto& e = node_[i];
         e.mn += N * m * n;
         e.mk += N * m * k;
-        e.soil_volume += N * V;
+        if (track_soil_volume) e.soil_volume += N * V;
         if (sp) {
           auto& w = water_.acc[i];
           w.m += N * mf;
@@ -1013,11 +1014,11 @@ class SemiImplicit final : public Formulation<Dim> {
   std::vector<Permeability> perm_;          // per solid material (the initialisation phase's while it runs)
   std::vector<Permeability> scene_perm_;    // per solid material, as the scene gives it
   bool tie_ = false;                        // initialisation: water points follow their soil points
-  bool conservative_ = false;
-  bool remove_escaped_ = false;              // solver.escaped_water = remove (double-point)
-  std::vector<char> escaped_;                // per water point, this step (reused)
-  long escaped_points_ = 0;
-  double escaped_mass_ = 0.0;                // kg (per metre in 2D)                // solver.continuity = conservative (solve_pressure)
+  bool conservative_ = false;               // solver.continuity = conservative (solve_pressure)
+  bool remove_escaped_ = false;             // solver.escaped_water = remove (double-point)
+  std::vector<char> escaped_;               // per water point, this step (reused)
+  long escaped_points_ = 0;                 // removed so far
+  double escaped_mass_ = 0.0;               // kg (per metre in 2D), removed so far
   bool fast_drainage_ = false;              // initialisation with its own permeability is running
   std::vector<std::int64_t> partner_;       // per water-point id: the coincident soil point's id (-1: none)
   std::vector<int> fluid_of_material_;      // per solid material: its pore water's material

@@ -7,6 +7,7 @@
 #include "scene/scene.hpp"
 #include "support/indicators.hpp"
 #include "support/run_helpers.hpp"
+#include "support/slope_scene.hpp"
 #include "support/soft_block.hpp"
 
 namespace {
@@ -147,9 +148,6 @@ json slope(const std::string& formulation, const std::string& shape) {
   return s;
 }
 
-/// Pa, the B3 slope's total overburden at the base: rho_sat g 20 m (n = 0.4, rho_s = 2500).
-constexpr double kSlopeBaseOverburden = ((1 - 0.4) * 2500.0 + 0.4 * 1000.0) * 9.81 * 20.0;
-
 }  // namespace
 
 // The free-standing block with B-splines (before the fix: diverged in the first steps). Bounds:
@@ -177,7 +175,7 @@ TEST(SemiImplicitHardCases, FreeStandingBlockWithBsplinesStaysBoundedAndSmooth) 
 // nodes whose support holds a strip of water (docs/formulations.md, "Free-surface nodes with an
 // ill-posed fit"); this test allowed -40 % until that fix.
 TEST(SemiImplicitHardCases, SlopeUnderGravityStaysBounded) {
-  const double bound = kSlopeBaseOverburden;
+  const double bound = swmpm::testing::kB3SlopeBaseOverburden;
   struct Case {
     std::string formulation, shape;
   };
@@ -208,7 +206,7 @@ TEST(SemiImplicitHardCases, DoublePointCrestSurfaceStaysBounded) {
   s["solver"] = {{"stabilisation", {{"pressure", "mfvp-linear"}, {"fbar", "modified"}}}};
   s["time"] = {{"end", 0.7}, {"dt", 0.003}};
   s["output"] = {{"interval", 0.05}};
-  const double bound = kSlopeBaseOverburden;
+  const double bound = swmpm::testing::kB3SlopeBaseOverburden;
   const FieldStats r = run_field(s, "si-slope-dp-crest", 1.5);
   EXPECT_EQ(r.status, "completed");
   EXPECT_LT(r.p_max, bound);

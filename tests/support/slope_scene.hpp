@@ -8,6 +8,10 @@
 
 namespace swmpm::testing {
 
+/// Pa, the total overburden at the base of B3's saturated slope (examples/slope-stability-mohr-coulomb:
+/// n = 0.4, ρ_s = 2500 kg/m³, 20 m high): ρ_sat g H, the bound of its pore pressure.
+inline constexpr double kB3SlopeBaseOverburden = ((1 - 0.4) * 2500.0 + 0.4 * 1000.0) * 9.81 * 20.0;
+
 inline nlohmann::json dry_mc_slope(const char* name, double srf, double end) {
   return {
       {"name", name},

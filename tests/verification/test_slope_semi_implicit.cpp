@@ -18,6 +18,7 @@
 #include "postprocess/postprocess.hpp"
 #include "support/indicators.hpp"
 #include "support/run_helpers.hpp"
+#include "support/slope_scene.hpp"
 
 namespace {
 
@@ -90,7 +91,7 @@ TEST(SlopeSemiImplicit, B3PermeabilityAndFbar) {
   // 0.6 m (at the example's 0.5 m cells 0.4 m, and the crest settles 0.74 m more with low k, which
   // the 1 m cells do not resolve: 0.16 m less here).
   EXPECT_GT(low.band_depth, high.band_depth + 0.3);
-  const double total = ((1 - 0.4) * 2500.0 + 0.4 * 1000.0) * 9.81 * 20.0;  // rho_sat g H at the base
+  const double total = swmpm::testing::kB3SlopeBaseOverburden;  // rho_sat g H at the base
   for (const Slope* s : {&high, &low}) {
     EXPECT_LT(s->p_max, total);
     EXPECT_GT(s->p_min, -0.1 * total);
