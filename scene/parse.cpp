@@ -1033,9 +1033,10 @@ const Table& solver_table() {
            .values = {"non-conservative", "conservative"},
            .meaning = "Two-phase mixture volume balance: `non-conservative` (1 − n) div v_s + n div v_w "
                       "(the seeds' eq. 9 / eq. 60) or `conservative` div[(1 − n) v_s + n v_w], which adds "
-                      "(v_w − v_s)·grad n (needed at large strain, B2; see docs/formulations.md); default by "
-                      "formulation: `conservative` (semi-implicit, the only ones that implement it), "
-                      "`non-conservative` otherwise."},
+                      "(v_w − v_s)·grad n (needed at large strain, A2 and B2; see docs/formulations.md); in "
+                      "explicit-single-point it also adds the interaction force p grad n between the phases; "
+                      "default by formulation: `conservative` (semi-implicit), `non-conservative` otherwise "
+                      "(explicit-single-point: the seed's eq. 9)."},
           {.name = "escaped_water", .type = Type::choice, .def = "keep", .values = {"keep", "remove"},
            .meaning = "Double-point only: water points that have left the soil (the soil's volume fraction "
                       "interpolated at the point below one half) stay as free water (`keep`) or leave the "
@@ -1084,9 +1085,11 @@ const Table& stabilisation_table() {
           {.name = "strain_smoothing", .type = Type::boolean, .def = true,
            .meaning = "Smooth volumetric strain over cells."},
           {.name = "pressure", .type = Type::choice,
-           .values = {"none", "mfvp-constant", "mfvp-linear", "mfvp-quadratic", "node-remap"},
+           .values = {"none", "mfvp-constant", "mfvp-linear", "mfvp-quadratic", "node-remap", "cell-constant"},
            .meaning = "Pore-pressure stabilisation; default by formulation: `mfvp-linear` "
-                      "(explicit-single-point and semi-implicit), `none` otherwise."},
+                      "(explicit-single-point and semi-implicit), `none` otherwise. `cell-constant` "
+                      "(explicit-single-point): one pressure per grid cell, its rate the exact transpose of "
+                      "the pressure forces (docs/formulations.md)."},
           {.name = "fbar", .type = Type::choice, .def = "none", .values = {"none", "standard", "modified"},
            .meaning = "F-bar treatment of volumetric locking (seed 001 §4.4.2, every formulation): `standard` "
                       "scales ΔF by the node-wise average of det ΔF (eqs. 79-80); `modified` also averages the "
@@ -1304,10 +1307,11 @@ class SceneParser {
     const bool semi_implicit = s_.formulation == Formulation::semi_implicit_single_point ||
                                s_.formulation == Formulation::semi_implicit_double_point;
     if (s_.solver.continuity.empty()) s_.solver.continuity = semi_implicit ? "conservative" : "non-conservative";
-    if (s_.solver.continuity == "conservative" && !semi_implicit)
+    if (s_.solver.continuity == "conservative" && !semi_implicit &&
+        s_.formulation != Formulation::explicit_single_point)
       c_.error(top.at("solver") + "/continuity",
-               "got \"conservative\", which the semi-implicit formulations implement; this scene's formulation "
-               "uses the non-conservative form (remove the key)");
+               "got \"conservative\", which the two-phase formulations implement; this scene's formulation "
+               "has no pore water (remove the key)");
     if (s_.solver.escaped_water == "remove" && s_.formulation != Formulation::semi_implicit_double_point)
       c_.error(top.at("solver") + "/escaped_water",
                "got \"remove\", which applies to the water points of semi-implicit-double-point; this scene's "

@@ -65,7 +65,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     const auto& pressure = s.solver.stabilisation.pressure;
     if (pressure == "node-remap")
       throw std::runtime_error("solver.stabilisation.pressure: \"node-remap\" belongs to the semi-implicit "
-                               "formulations (available here: none, mfvp-constant, mfvp-linear, mfvp-quadratic)");
+                               "formulations (available here: none, mfvp-constant, mfvp-linear, mfvp-quadratic, "
+                               "cell-constant)");
+    cell_pressure_ = pressure == "cell-constant";
+    conservative_ = s.solver.continuity == "conservative";
     if (!state.solid.two_phase())
       throw std::runtime_error("explicit-single-point needs saturated particles (pore_pressure, porosity, fluid_mass "
                                "in particles/solid.vtu): run swmpm preprocess with a body that has a solid and a fluid");
@@ -95,6 +98,8 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     std::size_t cells = 1;
     for (int a = 0; a < Dim; ++a) cells *= static_cast<std::size_t>(grid_.axis(a).cells);
     cell_sum_.assign(cells, {0.0, 0.0, 0.0, 0.0});
+    if (cell_pressure_) cell_.assign(cells, CellPressure{});
+    if (conservative_) porosity_.assign(grid_.num_nodes(), {0.0, 0.0});
   }
 
   std::string name() const override { return "explicit-single-point"; }
@@ -120,6 +125,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     transfer::build_schedule(grid_, sd_, schedule_);
     clear_nodes();
     lap("shape functions");
+
+    if (cell_pressure_) project_pressure_to_cells(ps);                                   // (1b)
+    if (conservative_) nodal_porosity(ps);                                               // (1c)
+    if (cell_pressure_ || conservative_) lap("cell pressure and nodal porosity");
 
     scatter_both_phases(ps, b);                                                          // (2)
     for (const auto& ff : face_forces_) {
@@ -230,6 +239,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       solid_.acc[i] = {Vec<Dim>::Zero(), Vec<Dim>::Zero(), 0.0};
       fluid_.acc[i] = {Vec<Dim>::Zero(), Vec<Dim>::Zero(), 0.0};
       drag_[i] = 0.0;
+      if (conservative_) porosity_[i] = {0.0, 0.0};
     });
   }
 
@@ -242,14 +252,21 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       const auto& sp = sd_[p];
       const PoreFluid& pf = pore_[ps.material[p]];
       const double V = ps.V[p], n = ps.n[p];
+      const bool wet = ps.fluid_material[p] >= 0;  // dry points (no pore fluid) carry no drag
+      // The pressure the forces see: the point's own, or its cell's (cell-constant pressure); the
+      // porosity: the point's own, or (conservative) n^ interpolated from the nodal porosity, whose
+      // gradient adds the interaction force p grad n^ (fluid +, soil -).
+      const double pp = cell_pressure_ ? (wet ? cell_[pcell_[p]].p : 0.0) : ps.p[p];
+      const double nn = conservative_ ? nhat_[p] : n;
+      const double ps_solid = (1.0 - nn) * pp * V, ps_fluid = nn * pp * V;  // N m (N in 2D per m)
+      // f_s = N (m_s b - p V grad n^) - A grad N with A = V sigma' - (1 - n) p V I;
+      // f_f = N (m_f b + p V grad n^) + n p V grad N
       const Mat3 s = to_matrix(ps.sigma[p]);
-      const double ps_solid = (1.0 - n) * ps.p[p] * V, ps_fluid = n * ps.p[p] * V;  // N m (N in 2D per m)
-      // f_s = N m_s b - A grad N with A = V sigma' - (1 - n) p V I;  f_f = N m_f b + n p V grad N
       const MatD<Dim> A = V * s.template topLeftCorner<Dim, Dim>() - ps_solid * MatD<Dim>::Identity();
       const double m_s = ps.m[p], m_f = ps.m_f[p];
       const Vec<Dim> mv_s = m_s * ps.v[p], mv_f = m_f * ps.v_f[p];
-      const Vec<Dim> mb_s = m_s * b, mb_f = m_f * b;
-      const bool wet = ps.fluid_material[p] >= 0;  // dry points (no pore fluid) carry no drag
+      const Vec<Dim> interaction = conservative_ ? Vec<Dim>((pp * V) * grad_n_[p]) : Vec<Dim>::Zero();
+      const Vec<Dim> mb_s = m_s * b - interaction, mb_f = m_f * b + interaction;
       const double drag = wet ? n * n * pf.rho_f * g_earth / pf.k * V : 0.0;
       // Row-factored (shape::for_each_row): grad N = (dwx[a] w_r, wx[a] g_r).
       shape::for_each_row(grid_, sp, [&](std::size_t row, double w_r, const Vec<Dim - 1>& g_r) {
@@ -341,19 +358,93 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   }
 
   /// (6) L_s = sum v_s (x) grad N (into ps.L) and div v_f = sum v_f . grad N (eqs. 24-25).
+  /// With the conservative continuity, also grad n^ . (v_f - v_s) at the point (velocities
+  /// interpolated from the nodes); with the cell-constant pressure, the point's rate of change of
+  /// pore-water volume before any smoothing,
+  ///   r_p = V_p [ (1 - n) div v_s + n div v_f (+ grad n^ . (v_f - v_s)) ],
+  /// the exact transpose of the pressure forces of (2) (docs/formulations.md, "Cell-constant pressure").
   void strain_rates(ParticleSet<Dim>& ps) {
     const long n = static_cast<long>(ps.size());
     div_f_.resize(ps.size());
+    if (conservative_) flux_.resize(ps.size());
+    if (cell_pressure_) vol_rate_.resize(ps.size());
+    const bool relative = conservative_ || cell_pressure_;
 #pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       MatD<Dim> L = MatD<Dim>::Zero();
       double div_f = 0.0;
-      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double, const Vec<Dim>& dN) {
+      Vec<Dim> w = Vec<Dim>::Zero();  // v_f - v_s at the point
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
         L.noalias() += solid_.v[i] * dN.transpose();
         div_f += fluid_.v[i].dot(dN);
+        if (relative) w += N * (fluid_.v[i] - solid_.v[i]);
       });
       ps.L[p] = L;
       div_f_[p] = div_f;
+      const double flux = conservative_ ? grad_n_[p].dot(w) : 0.0;
+      if (conservative_) flux_[p] = flux;
+      if (cell_pressure_) {
+        const double nn = conservative_ ? nhat_[p] : ps.n[p];
+        vol_rate_[p] = ps.fluid_material[p] >= 0 ? ps.V[p] * ((1.0 - nn) * L.trace() + nn * div_f + flux) : 0.0;
+      }
+    }
+  }
+
+  /// (1b) Cell-constant pressure: p_c = sum S_p p_p / sum S_p over the saturated points whose
+  /// centre lies in cell c at the start of the step, S_p = n_p V_p / K_f (the storage of eq. 9).
+  /// A projection (applied twice it changes nothing): the points of a cell carry one pressure, and
+  /// only a point that moves into another cell is averaged anew.
+  void project_pressure_to_cells(const ParticleSet<Dim>& ps) {
+    const std::size_t n = ps.size();
+    pcell_.resize(n);
+    const long N = static_cast<long>(n);
+#pragma omp parallel for schedule(static) if (N > parallel_threshold)
+    for (long p = 0; p < N; ++p) pcell_[p] = cell_of(ps.x[p]);
+    for (std::size_t p = 0; p < n; ++p) cell_[pcell_[p]] = CellPressure{};
+    for (std::size_t p = 0; p < n; ++p) {  // serial: fixed summation order
+      if (ps.fluid_material[p] < 0) continue;
+      auto& c = cell_[pcell_[p]];
+      const double storage = ps.n[p] * ps.V[p] / pore_[ps.material[p]].K_f;  // m^3/Pa (m^2/Pa in 2D)
+      c.S += storage;
+      c.p += storage * ps.p[p];
+    }
+    for (std::size_t p = 0; p < n; ++p) {
+      auto& c = cell_[pcell_[p]];
+      if (c.S > 0.0 && !c.done) c.p /= c.S, c.done = true;
+    }
+  }
+
+  /// (1c) Nodal porosity n_I = sum N m_s n / sum N m_s (soil-mass weighted, as seed 001 step 2c),
+  /// then per point n^ = sum N_I n_I and grad n^ = sum grad N_I n_I: the porosity field whose
+  /// gradient the conservative continuity and the interaction force share.
+  void nodal_porosity(const ParticleSet<Dim>& ps) {
+    schedule_.run([&](int p) {
+      const double m = ps.m[p], mn = m * ps.n[p];
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        porosity_[i][0] += N * mn;
+        porosity_[i][1] += N * m;
+      });
+    });
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      auto& np = porosity_[i];
+      np[0] = np[1] > transfer::empty_node_mass ? np[0] / np[1] : 0.0;
+    });
+    const long n = static_cast<long>(ps.size());
+    nhat_.resize(ps.size());
+    grad_n_.resize(ps.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      double nh = 0.0, wsum = 0.0;
+      Vec<Dim> g = Vec<Dim>::Zero();
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
+        if (!(porosity_[i][1] > transfer::empty_node_mass)) return;
+        nh += N * porosity_[i][0];
+        g += porosity_[i][0] * dN;
+        wsum += N;
+      });
+      // Every node of a point's support holds that point's mass, so wsum = 1 (partition of unity).
+      nhat_[p] = nh / wsum;
+      grad_n_[p] = g;
     }
   }
 
@@ -372,13 +463,13 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   /// strain rate appears).
   void smooth_volumetric_rates(ParticleSet<Dim>& ps) {
     const std::size_t n = ps.size();
-    cell_.resize(n);
+    smooth_cell_.resize(n);
     const long N = static_cast<long>(n);
 #pragma omp parallel for schedule(static) if (N > parallel_threshold)
-    for (long p = 0; p < N; ++p) cell_[p] = cell_of(ps.x[p]);
-    for (std::size_t p = 0; p < n; ++p) cell_sum_[cell_[p]] = {0.0, 0.0, 0.0, 0.0};
+    for (long p = 0; p < N; ++p) smooth_cell_[p] = cell_of(ps.x[p]);
+    for (std::size_t p = 0; p < n; ++p) cell_sum_[smooth_cell_[p]] = {0.0, 0.0, 0.0, 0.0};
     for (std::size_t p = 0; p < n; ++p) {  // serial: cells are shared; fixed summation order
-      auto& cs = cell_sum_[cell_[p]];
+      auto& cs = cell_sum_[smooth_cell_[p]];
       cs[0] += ps.m[p] * ps.L[p].trace();
       cs[1] += ps.m[p];
       cs[2] += ps.m_f[p] * div_f_[p];
@@ -386,7 +477,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     }
 #pragma omp parallel for schedule(static) if (N > parallel_threshold)
     for (long p = 0; p < N; ++p) {
-      const auto& cs = cell_sum_[cell_[p]];
+      const auto& cs = cell_sum_[smooth_cell_[p]];
       const double div_s = cs[0] / cs[1];
       ps.L[p] += (div_s - ps.L[p].trace()) / Dim * MatD<Dim>::Identity();
       if (cs[3] > 0.0) div_f_[p] = cs[2] / cs[3];
@@ -403,6 +494,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   /// (7) eq. 9: pdot_p = -(K_f / n)[(1 - n) div v_s + n div v_f], then the node-based multi-field
   /// variational step (eqs. 33-34) with the basis Q of `mfvp_order_`.
   long update_pore_pressure(ParticleSet<Dim>& ps, double dt) {
+    if (cell_pressure_) return update_cell_pressure(ps, dt);
     // With a multi-field variational step the rate is computed inside its scatter and the
     // pressure updated inside its gather (two passes over the particles fewer).
     if (mfvp_order_ == 0) return mfvp<0>(ps, dt);
@@ -418,10 +510,35 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     return bad == transfer::no_particle ? -1 : bad;
   }
 
-  /// eq. 9 at particle p (0 for a dry point in a saturated scene).
+  /// (7) Cell-constant pressure: S_c dp_c/dt = -sum_{p in c} r_p (strain_rates), then every
+  /// saturated point of the cell takes p_c + dt dp_c/dt; S_c, p_c and the cells are those of the
+  /// start of the step (project_pressure_to_cells), as in the forces of (2).
+  long update_cell_pressure(ParticleSet<Dim>& ps, double dt) {
+    const std::size_t n = ps.size();
+    for (std::size_t p = 0; p < n; ++p) cell_[pcell_[p]].r = 0.0;
+    for (std::size_t p = 0; p < n; ++p) cell_[pcell_[p]].r += vol_rate_[p];  // serial: fixed order
+    const long N = static_cast<long>(n);
+    long bad = transfer::no_particle;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (N > parallel_threshold)
+    for (long p = 0; p < N; ++p) {
+      if (ps.fluid_material[p] < 0) continue;
+      const auto& c = cell_[pcell_[p]];
+      ps.p[p] = c.p - dt * c.r / c.S;
+      if (!std::isfinite(ps.p[p])) bad = std::min(bad, p);
+    }
+    return bad == transfer::no_particle ? -1 : bad;
+  }
+
+  /// eq. 9 at particle p (0 for a dry point in a saturated scene); with the conservative
+  /// continuity the mixture's volume balance (n/K_f) dp/dt = -div[(1 - n^) v_s + n^ v_f], i.e. eq. 9
+  /// with n^ and the term grad n^ . (v_f - v_s).
   double pressure_rate(const ParticleSet<Dim>& ps, int p) const {
     if (ps.fluid_material[p] < 0) return 0.0;
     const double np = ps.n[p], K_f = pore_[ps.material[p]].K_f;
+    if (conservative_) {
+      const double nn = nhat_[p];
+      return -(K_f / np) * ((1.0 - nn) * div_s_[p] + nn * div_f_[p] + flux_[p]);
+    }
     return -(K_f / np) * ((1.0 - np) * div_s_[p] + np * div_f_[p]);
   }
 
@@ -567,6 +684,20 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   bool fast_drainage_ = false;  // an initialisation phase with its own permeability is running
   bool smoothing_;
   int mfvp_order_;  // -1 none, 0 constant, 1 linear, 2 quadratic basis Q
+  bool cell_pressure_ = false;  // solver.stabilisation.pressure = cell-constant
+  bool conservative_ = false;   // solver.continuity = conservative
+  /// Per cell, cell-constant pressure: storage S_c, pressure p_c (sum S p before the division),
+  /// sum of the points' r_p.
+  struct CellPressure {
+    double S = 0.0, p = 0.0, r = 0.0;
+    bool done = false;
+  };
+  std::vector<CellPressure> cell_;                   // per cell
+  std::vector<std::size_t> pcell_;                   // per particle: its cell at the start of the step
+  std::vector<double> vol_rate_;                     // per particle: r_p
+  std::vector<std::array<double, 2>> porosity_;      // per node: sum N m n -> n_I, sum N m
+  std::vector<double> nhat_, flux_;                  // per particle: n^, grad n^ . (v_f - v_s)
+  std::vector<Vec<Dim>> grad_n_;                     // per particle: grad n^
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
   std::vector<std::vector<int>> material_particles_;
   std::vector<PoreFluid> pore_;  // per solid material
@@ -575,7 +706,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::vector<double> mfvp_;                         // per node: packed H_I, then rhs / coefficients a_I
   std::vector<double> div_f_;                        // per particle
   std::vector<double> div_s_;                        // per particle: tr L_s of (6), before F-bar
-  std::vector<std::size_t> cell_;                    // per particle
+  std::vector<std::size_t> smooth_cell_;             // per particle
   std::vector<std::array<double, 4>> cell_sum_;      // per cell: sum m div v_s, sum m_s, sum m_f div v_f, sum m_f
   NodeBox<Dim> box_;
   std::vector<shape::ShapeData<Dim, S>> sd_;
