@@ -16,26 +16,32 @@ struct Outcome {
   double max_p1;        // Pa, largest pore pressure at P1 over the run
   double p1_ramp_end;   // Pa, at t = 0.1 s
   double checkerboard;  // final frame
+  double cell_checkerboard;  // final frame, on cell averages (support/indicators.hpp)
 };
 
-Outcome run_a5(const std::string& pressure, bool smoothing, double end, const std::string& name) {
+Outcome run_a5(const std::string& pressure, bool smoothing, double end, const std::string& name,
+               const std::string& continuity = "") {
   json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/self-weight-consolidation/scene.json");
   s["solver"]["stabilisation"] = {{"pressure", pressure}, {"strain_smoothing", smoothing}};
+  if (!continuity.empty()) s["solver"]["continuity"] = continuity;
   s["time"]["end"] = end;
   s["output"]["interval"] = end;
   const std::string run = swmpm::testing::run_scene(s, name);
   const auto t = swmpm::post::read_csv(run + "/monitors.csv");
   const auto& time = t.column("time");
   const auto& p1 = t.column("P1.pore_pressure");
-  Outcome o{0.0, 0.0, 0.0};
+  Outcome o{0.0, 0.0, 0.0, 0.0};
   for (std::size_t k = 0; k < p1.size(); ++k) {
     o.max_p1 = std::max(o.max_p1, p1[k]);
     if (time[k] <= 0.1 + 1e-9) o.p1_ramp_end = p1[k];
   }
   const auto f = swmpm::testing::last_frame(run);
-  o.checkerboard = swmpm::testing::checkerboard_indicator(f, f.get("pore_pressure", "frame").values, 0.1);
-  std::printf("A5 %s, smoothing %d, to %.2f s: max P1 %.0f Pa, P1(0.1 s) %.0f Pa, checkerboard %.4f\n",
-              pressure.c_str(), smoothing ? 1 : 0, end, o.max_p1, o.p1_ramp_end, o.checkerboard);
+  const auto& p = f.get("pore_pressure", "frame").values;
+  o.checkerboard = swmpm::testing::checkerboard_indicator(f, p, 0.1);
+  o.cell_checkerboard = swmpm::testing::cell_checkerboard_indicator(
+      f, p, s["grid"]["cell_size"].get<double>(), s["grid"]["min"][0].get<double>(), s["grid"]["min"][1].get<double>());
+  std::printf("A5 %s, smoothing %d, to %.2f s: max P1 %.0f Pa, P1(0.1 s) %.0f Pa, checkerboard %.4f (cells %.4f)\n",
+              pressure.c_str(), smoothing ? 1 : 0, end, o.max_p1, o.p1_ramp_end, o.checkerboard, o.cell_checkerboard);
   return o;
 }
 
@@ -50,4 +56,17 @@ TEST(Stability, SelfWeightConsolidationStabilisedStaysBoundedAndSmooth) {
   const Outcome off = run_a5("none", false, 0.4, "a5-off");
   EXPECT_GT(off.max_p1, 2.0 * 39.0e3);
   EXPECT_GT(off.checkerboard, 3.0 * on.checkerboard);  // measured 0.265
+}
+
+// The cell-constant pressure with the conservative continuity on the same hard case: one pressure
+// per 0.125 m cell, so the indicator is taken on cell averages (of both runs). Rougher than the
+// mfvp-linear run (cells 0.041): points that cross into another cell during a step carry their old
+// cell's value until the next average, which shows where the block shears at the toe.
+TEST(Stability, SelfWeightConsolidationCellConstantPressureStaysBoundedAndSmooth) {
+  const Outcome cc = run_a5("cell-constant", true, 0.4, "a5-cc", "conservative");
+  EXPECT_LT(cc.max_p1, 39.0e3);      // measured 2026-12-02: 28.7 kPa
+  EXPECT_GT(cc.p1_ramp_end, 20.0e3);  // measured 25.7 kPa
+  EXPECT_LT(cc.cell_checkerboard, 0.1);  // measured 0.075
+  const Outcome off = run_a5("none", false, 0.4, "a5-off-cells");
+  EXPECT_GT(off.cell_checkerboard, 2.5 * cc.cell_checkerboard);  // measured 0.219
 }

@@ -27,6 +27,21 @@ TEST(Stability, StripLoadStabilisedPressureIsSmoothUnstabilisedCheckerboards) {
   EXPECT_LT(off.max_abs_p, 25.0 * q);  // but bounded over the 0.1 s
 }
 
+// The cell-constant pressure with the conservative continuity (docs/formulations.md, "Cell-constant
+// pressure and conservative continuity"): one pressure per 0.5 m cell, so the indicator is taken
+// over 0.8 m (1.6 cells, as 0.4 m is 1.6 particle spacings above) — a smooth field in steps of
+// one cell stays low there, a cell checkerboard (the Q1-P0 mode) does not.
+TEST(Stability, StripLoadCellConstantPressureHasNoCheckerboard) {
+  const auto cc = swmpm::testing::run_strip_load("scene.json", "cell-constant", true, 0.8, "a3-cc", "conservative");
+  const auto off = swmpm::testing::run_strip_load("scene.json", "none", false, 0.8, "a3-off-wide");
+  EXPECT_EQ(cc.status, 0);
+  EXPECT_TRUE(cc.finite);
+  EXPECT_LT(cc.max_abs_p, 2.0 * q);                        // measured 2026-12-02: 22.3 kPa
+  EXPECT_LT(cc.checkerboard, 0.05);                        // measured 0.0194
+  EXPECT_GT(off.checkerboard, 5.0 * cc.checkerboard);      // measured 0.270 without stabilisation
+  EXPECT_NEAR(cc.corner_uy, -6.358e-3, 0.05 * 6.358e-3);  // measured 6.363 mm; mfvp-linear 6.358 mm
+}
+
 // The 1 x 1 m / 0.05 m reading (dt auto 1.36e-5 s, 7335 steps): the same contrast.
 TEST(Stability, StripLoadSmallReadingSlow) {
   const auto on = swmpm::testing::run_strip_load("scene-small.json", "mfvp-linear", true, 0.04, "a3s-on");

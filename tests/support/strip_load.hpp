@@ -22,11 +22,13 @@ struct StripLoadRun {
 };
 
 /// Runs examples/strip-load-consolidation/`file` with the given stabilisation on one thread.
-/// `radius` of the checkerboard fit: 1.6 lattice spacings of the scene.
+/// `radius` of the checkerboard fit: 1.6 lattice spacings of the scene. `continuity`: the scene's
+/// solver.continuity (empty: the formulation's default).
 inline StripLoadRun run_strip_load(const std::string& file, const std::string& pressure, bool smoothing, double radius,
-                                   const std::string& name) {
+                                   const std::string& name, const std::string& continuity = "") {
   nlohmann::json s = load_json(std::string(SWMPM_SOURCE_DIR "/examples/strip-load-consolidation/") + file);
   s["solver"]["stabilisation"] = {{"pressure", pressure}, {"strain_smoothing", smoothing}};
+  if (!continuity.empty()) s["solver"]["continuity"] = continuity;
   StripLoadRun r;
   const std::string run = run_scene(s, name, 1, &r.status);
   const auto t = post::read_csv(run + "/monitors.csv");
