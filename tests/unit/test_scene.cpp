@@ -472,6 +472,15 @@ TEST(SceneErrors, UnknownEnumerationValuesListTheValidOnes) {
   json u = scene_2d();  // only the double-point water points can leave
   u["solver"]["escaped_water"] = "remove";
   EXPECT_TRUE(reports(u, "/solver/escaped_water", "applies to the water points of semi-implicit-double-point"));
+  // The conservative continuity belongs to the two-phase formulations (explicit-single-point too).
+  json c = scene_2d();
+  c["solver"]["continuity"] = "conservative";
+  c["solver"]["stabilisation"]["pressure"] = "cell-constant";
+  EXPECT_TRUE(problems(c).empty()) << dump_lines(problems(c));
+  json d = scene_2d();
+  d["formulation"] = "dry";
+  d["solver"]["continuity"] = "conservative";
+  EXPECT_TRUE(reports(d, "/solver/continuity", "this scene's formulation has no pore water"));
 }
 
 TEST(SceneErrors, MissingRequiredKeys) {
