@@ -17,12 +17,17 @@ from each run.json.
 --fbar none,standard,modified,modified:1.5 (dry): one row per F-bar variant (solver.stabilisation.fbar,
   and fbar_patch after the colon), with --shape gimp|bspline2 and --material linear-elastic|hencky.
 
+--set KEY.PATH=VALUE (repeatable): change every scene, e.g. solver.continuity=conservative
+  --set solver.stabilisation.pressure=cell-constant (explicit-single-point's large-strain scheme).
+
 Usage: bench/dry_box.py [--swmpm build/app/swmpm] [--sizes 10k,100k,1M,3d] [--threads 1,2]
                         [--steps 100] [--formulation dry] [--out bench/results/dry-box-<date>.md]
-                        [--fbar none,...] [--shape gimp] [--material linear-elastic]
+                        [--fbar none,...] [--shape gimp] [--material linear-elastic] [--set K=V ...]
 Memory per particle = (peak RSS of the run - peak RSS of a 1-particle run) / particles.
 """
 import argparse, datetime, json, os, platform, subprocess, sys, tempfile
+
+from speed_vs_error import apply_set
 
 SIZES = {  # name: (dimension, cells per side along x/y(/z), extent)
     "10k": (2, 50, 5.0),
@@ -109,6 +114,8 @@ def main():
     ap.add_argument("--fbar", default="none", help="comma list: none, standard, modified, modified:RATIO (dry)")
     ap.add_argument("--shape", default="gimp", choices=["linear", "gimp", "bspline2", "bspline3"])
     ap.add_argument("--material", default="linear-elastic")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
+                    help="change every scene, e.g. solver.stabilisation.pressure=cell-constant (repeatable)")
     ap.add_argument("--repeat", type=int, default=3,
                     help="runs per case; the table gives the fastest (timing noise on shared machines is additive) and the median")
     a = ap.parse_args()
@@ -119,8 +126,10 @@ def main():
       dim, n, ext = SIZES[name]
       for fb in a.fbar.split(","):
         for t in [int(x) for x in a.threads.split(",")]:
-            runs = [run(a.swmpm, scene(dim, n, ext, a.steps, a.formulation, fb, a.shape, a.material), t, work)
-                    for _ in range(a.repeat)]
+            sc = scene(dim, n, ext, a.steps, a.formulation, fb, a.shape, a.material)
+            for assignment in a.set:
+                apply_set(sc, assignment)
+            runs = [run(a.swmpm, sc, t, work) for _ in range(a.repeat)]
             runs.sort(key=lambda r: r["loop_us_per_particle_step"])
             r = runs[0]
             median = runs[len(runs) // 2]["loop_us_per_particle_step"]
@@ -142,7 +151,8 @@ def main():
     title = "Dry MPM" if a.formulation == "dry" else a.formulation
     lines = [f"# {title} speed — {datetime.date.today()}", "",
              f"Machine: {cpu}, {os.cpu_count()} cores, {platform.platform()}.",
-             f"Scene: {a.shape}, {a.material} box under gravity ({a.formulation}), 2x2(x2) particles per cell, MUSL, {a.steps} steps. "
+             f"Scene: {a.shape}, {a.material} box under gravity ({a.formulation}), 2x2(x2) particles per cell, MUSL, {a.steps} steps"
+             + "".join(f", `{x}`" for x in a.set) + ". "
              f"Time per particle-step is the time loop's (run.json loop_us_per_particle_step); best and median of {a.repeat} runs.", "",
              "| case | dim | particles | threads | steps | us per particle-step, best | median | bytes per particle |",
              "|---|---|---|---|---|---|---|---|"]

@@ -58,7 +58,7 @@ def apply_set(scene, assignment):
     keys = [int(k) if k.isdigit() else k for k in path.split(".")]
     node = scene
     for k in keys[:-1]:
-        node = node[k]
+        node = node.setdefault(k, {}) if isinstance(node, dict) else node[k]  # missing objects are created
     node[keys[-1]] = value
 
 

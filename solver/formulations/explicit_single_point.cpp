@@ -256,7 +256,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       // The pressure the forces see: the point's own, or its cell's (cell-constant pressure); the
       // porosity: the point's own, or (conservative) n^ interpolated from the nodal porosity, whose
       // gradient adds the interaction force p grad n^ (fluid +, soil -).
-      const double pp = cell_pressure_ ? (wet ? cell_[pcell_[p]].p : 0.0) : ps.p[p];
+      const double pp = cell_pressure_ ? (wet ? cell_[pcell_[p]].pressure() : 0.0) : ps.p[p];
       const double nn = conservative_ ? nhat_[p] : n;
       const double ps_solid = (1.0 - nn) * pp * V, ps_fluid = nn * pp * V;  // N m (N in 2D per m)
       // f_s = N (m_s b - p V grad n^) - A grad N with A = V sigma' - (1 - n) p V I;
@@ -393,25 +393,23 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   /// (1b) Cell-constant pressure: p_c = sum S_p p_p / sum S_p over the saturated points whose
   /// centre lies in cell c at the start of the step, S_p = n_p V_p / K_f (the storage of eq. 9).
   /// A projection (applied twice it changes nothing): the points of a cell carry one pressure, and
-  /// only a point that moves into another cell is averaged anew.
+  /// only a point that moves into another cell is averaged anew. The cell sums go through the
+  /// scatter schedule: a cell's points have their first node in one stripe or two neighbouring
+  /// ones (of different colours), so every cell is summed in one fixed order for any --threads.
   void project_pressure_to_cells(const ParticleSet<Dim>& ps) {
     const std::size_t n = ps.size();
     pcell_.resize(n);
     const long N = static_cast<long>(n);
 #pragma omp parallel for schedule(static) if (N > parallel_threshold)
     for (long p = 0; p < N; ++p) pcell_[p] = cell_of(ps.x[p]);
-    for (std::size_t p = 0; p < n; ++p) cell_[pcell_[p]] = CellPressure{};
-    for (std::size_t p = 0; p < n; ++p) {  // serial: fixed summation order
-      if (ps.fluid_material[p] < 0) continue;
+    schedule_.run([&](int p) { cell_[pcell_[p]] = CellPressure{}; });
+    schedule_.run([&](int p) {
+      if (ps.fluid_material[p] < 0) return;
       auto& c = cell_[pcell_[p]];
       const double storage = ps.n[p] * ps.V[p] / pore_[ps.material[p]].K_f;  // m^3/Pa (m^2/Pa in 2D)
       c.S += storage;
-      c.p += storage * ps.p[p];
-    }
-    for (std::size_t p = 0; p < n; ++p) {
-      auto& c = cell_[pcell_[p]];
-      if (c.S > 0.0 && !c.done) c.p /= c.S, c.done = true;
-    }
+      c.Sp += storage * ps.p[p];
+    });
   }
 
   /// (1c) Nodal porosity n_I = sum N m_s n / sum N m_s (soil-mass weighted, as seed 001 step 2c),
@@ -514,16 +512,14 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   /// saturated point of the cell takes p_c + dt dp_c/dt; S_c, p_c and the cells are those of the
   /// start of the step (project_pressure_to_cells), as in the forces of (2).
   long update_cell_pressure(ParticleSet<Dim>& ps, double dt) {
-    const std::size_t n = ps.size();
-    for (std::size_t p = 0; p < n; ++p) cell_[pcell_[p]].r = 0.0;
-    for (std::size_t p = 0; p < n; ++p) cell_[pcell_[p]].r += vol_rate_[p];  // serial: fixed order
-    const long N = static_cast<long>(n);
+    schedule_.run([&](int p) { cell_[pcell_[p]].r += vol_rate_[p]; });  // r was cleared in (1b)
+    const long N = static_cast<long>(ps.size());
     long bad = transfer::no_particle;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (N > parallel_threshold)
     for (long p = 0; p < N; ++p) {
       if (ps.fluid_material[p] < 0) continue;
       const auto& c = cell_[pcell_[p]];
-      ps.p[p] = c.p - dt * c.r / c.S;
+      ps.p[p] = (c.Sp - dt * c.r) / c.S;
       if (!std::isfinite(ps.p[p])) bad = std::min(bad, p);
     }
     return bad == transfer::no_particle ? -1 : bad;
@@ -686,11 +682,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   int mfvp_order_;  // -1 none, 0 constant, 1 linear, 2 quadratic basis Q
   bool cell_pressure_ = false;  // solver.stabilisation.pressure = cell-constant
   bool conservative_ = false;   // solver.continuity = conservative
-  /// Per cell, cell-constant pressure: storage S_c, pressure p_c (sum S p before the division),
-  /// sum of the points' r_p.
+  /// Per cell, cell-constant pressure: storage S_c = sum S_p, sum S_p p_p, sum of the points' r_p.
   struct CellPressure {
-    double S = 0.0, p = 0.0, r = 0.0;
-    bool done = false;
+    double S = 0.0, Sp = 0.0, r = 0.0;
+    double pressure() const { return Sp / S; }  // p_c (Pa)
   };
   std::vector<CellPressure> cell_;                   // per cell
   std::vector<std::size_t> pcell_;                   // per particle: its cell at the start of the step
