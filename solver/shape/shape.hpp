@@ -113,7 +113,40 @@ struct BSpline {
   static constexpr int degree = P;
   static constexpr bool bspline = true;
   static constexpr const char* name = P == 2 ? "bspline2" : "bspline3";
-  static void eval(const Axis& ax, double x, double /*l_p*/, int& base, double* w, double* dw) {
+  /// Away from the clamped ends (cells P .. n - P - 1 see only uniform knots) the closed forms of
+  /// the uniform B-splines, with xi = u - c in [0, 1) (de Boor; the recursion below gives the same
+  /// polynomials, tests/unit/test_shape.cpp):
+  ///   P = 2: w = ((1 - xi)^2 / 2, 1/2 + xi - xi^2, xi^2 / 2)
+  ///   P = 3: w = ((1 - xi)^3, 3 xi^3 - 6 xi^2 + 4, -3 xi^3 + 3 xi^2 + 3 xi + 1, xi^3) / 6
+  [[gnu::always_inline]] static void eval(const Axis& ax, double x, double l_p, int& base, double* w, double* dw) {
+    const double u = (x - ax.origin) / ax.h;  // in cells
+    const int c = cell_of(u, ax.cells);
+    if (c < P || c > ax.cells - P - 1) return eval_clamped(ax, x, l_p, base, w, dw);
+    base = c;
+    const double xi = u - c, inv_h = 1.0 / ax.h;
+    if constexpr (P == 2) {
+      const double r = 1.0 - xi;
+      w[0] = 0.5 * r * r;
+      w[1] = 0.5 + xi * r;
+      w[2] = 0.5 * xi * xi;
+      dw[0] = -r * inv_h;
+      dw[1] = (r - xi) * inv_h;
+      dw[2] = xi * inv_h;
+    } else {
+      const double r = 1.0 - xi, xi2 = xi * xi, xi3 = xi2 * xi;
+      constexpr double sixth = 1.0 / 6.0;
+      w[0] = sixth * r * r * r;
+      w[1] = sixth * (3.0 * xi3 - 6.0 * xi2 + 4.0);
+      w[2] = sixth * (-3.0 * xi3 + 3.0 * xi2 + 3.0 * xi + 1.0);
+      w[3] = sixth * xi3;
+      dw[0] = -0.5 * r * r * inv_h;
+      dw[1] = (1.5 * xi2 - 2.0 * xi) * inv_h;
+      dw[2] = (-1.5 * xi2 + xi + 0.5) * inv_h;
+      dw[3] = 0.5 * xi2 * inv_h;
+    }
+  }
+  /// Any cell, by the recursion (the only path in the P cells next to each clamped end).
+  static void eval_clamped(const Axis& ax, double x, double /*l_p*/, int& base, double* w, double* dw) {
     const double u = (x - ax.origin) / ax.h;  // in cells
     const int n = ax.cells;
     const int c = cell_of(u, n);

@@ -159,3 +159,32 @@ TEST(ShapeFunctions, BSplineInteriorValues) {
   EXPECT_NEAR(w[2], 1.0 / 6.0, 1e-14);
   EXPECT_NEAR(w[3], 0.0, 1e-14);
 }
+
+/// The closed forms of the uniform interior spans agree with the clamped-knot recursion there.
+TEST(ShapeFunctions, BSplineInteriorClosedFormsMatchTheRecursion) {
+  auto compare = [](auto policy, int P) {
+    using Shape = decltype(policy);
+    Axis ax;
+    ax.origin = -1.0;
+    ax.h = 0.3;
+    ax.cells = 12;
+    ax.nodes = ax.cells + P;
+    int tested = 0;
+    for (double u = P; u < ax.cells - P; u += 0.0137) {
+      const double x = ax.origin + u * ax.h;
+      int b1, b2;
+      double w1[4], dw1[4], w2[4], dw2[4];
+      Shape::eval(ax, x, 0.0, b1, w1, dw1);
+      Shape::eval_clamped(ax, x, 0.0, b2, w2, dw2);
+      ASSERT_EQ(b1, b2);
+      for (int i = 0; i <= P; ++i) {
+        EXPECT_NEAR(w1[i], w2[i], 1e-14) << "u = " << u;
+        EXPECT_NEAR(dw1[i], dw2[i], 1e-13) << "u = " << u;
+      }
+      ++tested;
+    }
+    EXPECT_GT(tested, 300);
+  };
+  compare(shape::BSpline2{}, 2);
+  compare(shape::BSpline3{}, 3);
+}
