@@ -140,6 +140,25 @@ void collect_face_forces(const Grid<Dim>& g, const ParticleLoads<Dim>& loads, co
   });
 }
 
+/// Distributes one face force over the nodes of its face point that carry mass: fn(node, weight)
+/// with weight = N_I(x_face) / sum of N_J(x_face) over the nodes J with has_mass(J). A node
+/// without mass gets no velocity in the grid update, so a share given to it would be lost: with
+/// linear shape functions a particle sitting on a node leaves the next node up massless while its
+/// face point still weighs it 1/2 (A2 on linear, h = 0.025 m, lost half its top load). The force
+/// and its resultant are kept exactly; only where it acts moves to the loaded nodes.
+template <int Dim, int S, class HasMass, class Fn>
+void for_each_loaded_node(const Grid<Dim>& g, const FaceForce<Dim, S>& ff, HasMass&& has_mass, Fn&& fn) {
+  double total = 0.0;
+  shape::for_each_node(g, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) {
+    if (has_mass(i)) total += N;
+  });
+  if (!(total > 0.0)) return;  // no loaded node at all: the particle's own nodes hold its mass, so not reached
+  const double scale = 1.0 / total;
+  shape::for_each_node(g, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) {
+    if (has_mass(i)) fn(i, N * scale);
+  });
+}
+
 /// Face index 2 * axis + side of a face name x_min .. z_max.
 int face_index(const std::string& name);
 

@@ -70,7 +70,9 @@ class Dry final : public Formulation<Dim> {
 
     transfer::scatter_mass_momentum_force(grid_, schedule_, ps, sd_, b, nodes_);       // (2)
     for (const auto& ff : face_forces_)                                             // (3)
-      shape::for_each_node(grid_, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) { nodes_.acc[i].f += N * ff.f; });
+      for_each_loaded_node(
+          grid_, ff, [&](std::size_t i) { return nodes_.acc[i].m > transfer::empty_node_mass; },
+          [&](std::size_t i, double N) { nodes_.acc[i].f += N * ff.f; });
     lap("p2g");
 
     update_grid(dt);                                                                    // (4)

@@ -134,10 +134,12 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     for (const auto& ff : face_forces_) {
       // A prescribed pore pressure (split) loads both phases, (1 - n) and n of -p A n.
       const double to_fluid = ff.split ? ps.n[ff.p] : 0.0;
-      shape::for_each_node(grid_, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) {
-        solid_.acc[i].f += (N * (1.0 - to_fluid)) * ff.f;
-        fluid_.acc[i].f += (N * to_fluid) * ff.f;
-      });
+      for_each_loaded_node(
+          grid_, ff, [&](std::size_t i) { return solid_.acc[i].m > transfer::empty_node_mass; },
+          [&](std::size_t i, double N) {
+            solid_.acc[i].f += (N * (1.0 - to_fluid)) * ff.f;
+            fluid_.acc[i].f += (N * to_fluid) * ff.f;
+          });
     }
     lap("p2g");
 

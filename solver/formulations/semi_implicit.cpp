@@ -232,10 +232,12 @@ class SemiImplicit final : public Formulation<Dim> {
     if (double_point_) scatter_water_points(ws, b);
     for (const auto& ff : face_forces_) {
       const double to_water = ff.split ? ps.n[ff.p] : 0.0;  // prescribed pore pressure: shared by porosity
-      shape::for_each_node(grid_, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) {
-        soil_.acc[i].f += (N * (1.0 - to_water)) * ff.f;
-        water_.acc[i].f += (N * to_water) * ff.f;
-      });
+      for_each_loaded_node(
+          grid_, ff, [&](std::size_t i) { return soil_.acc[i].m > transfer::empty_node_mass; },
+          [&](std::size_t i, double N) {
+            soil_.acc[i].f += (N * (1.0 - to_water)) * ff.f;
+            water_.acc[i].f += (N * to_water) * ff.f;
+          });
     }
     lap("p2g");
 

@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "solver/loads.hpp"
 #include "solver/shape/shape.hpp"
 
 using namespace swmpm;
@@ -187,4 +188,30 @@ TEST(ShapeFunctions, BSplineInteriorClosedFormsMatchTheRecursion) {
   };
   compare(shape::BSpline2{}, 2);
   compare(shape::BSpline3{}, 3);
+}
+
+/// A face force goes to the face point's nodes that carry mass, scaled so that the shares still
+/// sum to the force (solver/loads.hpp, for_each_loaded_node): the case of linear shape functions
+/// with a particle on a node row, whose next row up has no mass but a weight of 1/2 at the face point.
+TEST(FaceForces, MasslessNodesGetNoShareAndTheResultantIsKept) {
+  const Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), 0.1, 1, false);
+  FaceForce<2, 2> ff{};
+  ff.f = Vec<2>(0.0, -3.0);
+  shape::evaluate<shape::Linear>(g, Vec<2>(0.45, 0.85), Vec<2>::Zero().eval(), ff.sd);  // face point mid-cell in y
+  const auto& nn = g.nodes_per_axis();
+  const std::size_t top_row = 9;  // y = 0.9: no mass
+  auto has_mass = [&](std::size_t i) { return i / static_cast<std::size_t>(nn[0]) != top_row; };
+  Vec<2> total = Vec<2>::Zero();
+  double weight = 0.0;
+  for_each_loaded_node(g, ff, has_mass, [&](std::size_t i, double N) {
+    EXPECT_NE(i / static_cast<std::size_t>(nn[0]), top_row);
+    total += N * ff.f;
+    weight += N;
+  });
+  EXPECT_NEAR(weight, 1.0, 1e-14);
+  EXPECT_NEAR((total - ff.f).norm(), 0.0, 1e-14);
+  // Every node loaded: the face point's own weights.
+  double all = 0.0;
+  for_each_loaded_node(g, ff, [](std::size_t) { return true; }, [&](std::size_t, double N) { all += N; });
+  EXPECT_NEAR(all, 1.0, 1e-14);
 }
