@@ -33,10 +33,11 @@ struct Rest {
 /// Runs the example with `shape` (and `pressure` stabilisation) to `end` on one thread; H is the
 /// layer height (the top of the particles), to measure depths from.
 Rest run_e1(const std::string& shape, const std::string& pressure, double end, const std::string& name, double H = 2.0,
-            int ppc = 2) {
+            int ppc = 2, const std::string& continuity = "") {
   json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/hydrostatic-layer/scene.json");
   s["grid"]["shape_function"] = shape;
   s["solver"]["stabilisation"] = {{"pressure", pressure}, {"strain_smoothing", pressure != "none"}};
+  if (!continuity.empty()) s["solver"]["continuity"] = continuity;
   s["bodies"][0]["geometry"]["max"][1] = H;
   s["bodies"][0]["particles_per_cell"] = ppc;
   s["time"]["end"] = end;
@@ -114,6 +115,19 @@ TEST(HydrostaticLayer, E1GimpStaysAtRestWithoutStabilisation) {
   EXPECT_LT(r.p_rms, 1e-6);         // measured 2.3e-15
   EXPECT_LT(r.syy_rms, 1e-6);       // measured 2.3e-16
   EXPECT_LT(r.checkerboard, 1e-6);  // measured 3.0e-15
+}
+
+// The cell-constant pressure with the conservative continuity: the forces see the cell means of
+// the hydrostatic field, which balance the lumped weights exactly (GIMP), so nothing moves; every
+// point then reports its cell's mean, rho_f g h / 4 off its own depth with 2x2 points per cell
+// (h = 0.1 m): RMS h / (4 H) = 0.0125 of rho_f g H, exactly.
+TEST(HydrostaticLayer, E1GimpCellConstantPressureStaysAtRest) {
+  const Rest r = run_e1("gimp", "cell-constant", 0.3, "e1-gimp-cell", 2.0, 2, "conservative");
+  EXPECT_LT(r.max_vs, 1e-9);                   // measured 1.4e-17 m/s
+  EXPECT_LT(r.max_vf, 1e-9);                   // measured 1.5e-17 m/s
+  EXPECT_NEAR(r.p_rms, 0.1 / (4.0 * 2.0), 1e-9);  // measured 0.0125
+  EXPECT_LT(r.syy_rms, 1e-6);
+  EXPECT_LT(r.sxx_rms, 1e-6);
 }
 
 // Quadratic B-splines: point quadrature (2x2 particles per cell, no particle domain) is exact for
