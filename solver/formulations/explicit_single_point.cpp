@@ -255,6 +255,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       const PoreFluid& pf = pore_[ps.material[p]];
       const double V = ps.V[p], n = ps.n[p];
       const bool wet = ps.fluid_material[p] >= 0;  // dry points (no pore fluid) carry no drag
+      if (conservative_) gather_porosity(p);
       // The pressure the forces see: the point's own, or its cell's (cell-constant pressure); the
       // porosity: the point's own, or (conservative) n^ interpolated from the nodal porosity, whose
       // gradient adds the interaction force p grad n^ (fluid +, soil -).
@@ -368,9 +369,9 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   void strain_rates(ParticleSet<Dim>& ps) {
     const long n = static_cast<long>(ps.size());
     div_f_.resize(ps.size());
-    if (conservative_) flux_.resize(ps.size());
+    const bool keep_flux = conservative_ && !cell_pressure_;  // read by pressure_rate; r_p holds it otherwise
+    if (keep_flux) flux_.resize(ps.size());
     if (cell_pressure_) vol_rate_.resize(ps.size());
-    const bool relative = conservative_ || cell_pressure_;
 #pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       MatD<Dim> L = MatD<Dim>::Zero();
@@ -379,12 +380,12 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
         L.noalias() += solid_.v[i] * dN.transpose();
         div_f += fluid_.v[i].dot(dN);
-        if (relative) w += N * (fluid_.v[i] - solid_.v[i]);
+        if (conservative_) w += N * (fluid_.v[i] - solid_.v[i]);
       });
       ps.L[p] = L;
       div_f_[p] = div_f;
       const double flux = conservative_ ? grad_n_[p].dot(w) : 0.0;
-      if (conservative_) flux_[p] = flux;
+      if (keep_flux) flux_[p] = flux;
       if (cell_pressure_) {
         const double nn = conservative_ ? nhat_[p] : ps.n[p];
         vol_rate_[p] = ps.fluid_material[p] >= 0 ? ps.V[p] * ((1.0 - nn) * L.trace() + nn * div_f + flux) : 0.0;
@@ -414,9 +415,9 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     });
   }
 
-  /// (1c) Nodal porosity n_I = sum N m_s n / sum N m_s (soil-mass weighted, as seed 001 step 2c),
-  /// then per point n^ = sum N_I n_I and grad n^ = sum grad N_I n_I: the porosity field whose
-  /// gradient the conservative continuity and the interaction force share.
+  /// (1c) Nodal porosity n_I = sum N m_s n / sum N m_s (soil-mass weighted, as seed 001 step 2c).
+  /// The points' n^ = sum N_I n_I and grad n^ = sum grad N_I n_I, which the interaction force and
+  /// the conservative continuity share, are gathered in the force scatter of (2).
   void nodal_porosity(const ParticleSet<Dim>& ps) {
     schedule_.run([&](int p) {
       const double m = ps.m[p], mn = m * ps.n[p];
@@ -429,23 +430,24 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       auto& np = porosity_[i];
       np[0] = np[1] > transfer::empty_node_mass ? np[0] / np[1] : 0.0;
     });
-    const long n = static_cast<long>(ps.size());
     nhat_.resize(ps.size());
     grad_n_.resize(ps.size());
-#pragma omp parallel for schedule(static) if (n > parallel_threshold)
-    for (long p = 0; p < n; ++p) {
-      double nh = 0.0, wsum = 0.0;
-      Vec<Dim> g = Vec<Dim>::Zero();
-      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
-        if (!(porosity_[i][1] > transfer::empty_node_mass)) return;
-        nh += N * porosity_[i][0];
-        g += porosity_[i][0] * dN;
-        wsum += N;
-      });
-      // Every node of a point's support holds that point's mass, so wsum = 1 (partition of unity).
-      nhat_[p] = nh / wsum;
-      grad_n_[p] = g;
-    }
+  }
+
+  /// n^_p and grad n^_p from the nodal porosity of (1c), into nhat_ and grad_n_ (sized by
+  /// nodal_porosity). Every node of a point's support with N > 0 holds that point's mass, so the
+  /// weights of the nodes used sum to 1 (partition of unity) up to round-off.
+  void gather_porosity(int p) {
+    double nh = 0.0, wsum = 0.0;
+    Vec<Dim> g = Vec<Dim>::Zero();
+    shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
+      if (!(porosity_[i][1] > transfer::empty_node_mass)) return;
+      nh += N * porosity_[i][0];
+      g += porosity_[i][0] * dN;
+      wsum += N;
+    });
+    nhat_[p] = nh / wsum;
+    grad_n_[p] = g;
   }
 
   std::size_t cell_of(const Vec<Dim>& x) const {
