@@ -1042,6 +1042,13 @@ const Table& solver_table() {
                       "interpolated at the point below one half) stay as free water (`keep`) or leave the "
                       "run (`remove`: an outflow through a drained free surface into a reservoir that is not "
                       "modelled, as in B2; see docs/formulations.md)."},
+          {.name = "drag_integration", .type = Type::choice, .values = {"implicit", "semi-implicit"},
+           .meaning = "Semi-implicit formulations: the soil–water drag of the predictor implicit in both "
+                      "phases' velocities (`implicit`, the default) or in the water's only, the soil taking "
+                      "it from v_w* and its own v_s^t (`semi-implicit`, seed 001 eqs. 52–53). The seed's "
+                      "form amplifies the relative velocity by about M_w/M_s where the drag is stiff, so a "
+                      "node with much more water than soil (free water over soil, a seepage exit) diverges; "
+                      "see docs/formulations.md, \"Implicit drag\"."},
           {.name = "checkpoint_every", .type = Type::integer, .def = 50, .range = at_least(1),
            .meaning = "Steps between in-memory snapshots of the last good state."},
           {.name = "stabilisation", .type = Type::object,
@@ -1316,6 +1323,12 @@ class SceneParser {
       c_.error(top.at("solver") + "/escaped_water",
                "got \"remove\", which applies to the water points of semi-implicit-double-point; this scene's "
                "formulation has none (remove the key)");
+    if (!s_.solver.drag_integration.empty() && !semi_implicit)
+      c_.error(top.at("solver") + "/drag_integration",
+               "got \"" + s_.solver.drag_integration +
+                   "\", which applies to the semi-implicit formulations' predictor; this scene's formulation "
+                   "does not use it (remove the key)");
+    if (s_.solver.drag_integration.empty() && semi_implicit) s_.solver.drag_integration = "implicit";
     if (top.ok("initialisation")) parse_initialisation(top.get("initialisation"), top.at("initialisation"), top);
     if (s_.solver.stabilisation.fbar_patch == 0.0)
       s_.solver.stabilisation.fbar_patch = default_fbar_patch(s_.grid.shape_function);
@@ -2101,6 +2114,7 @@ class SceneParser {
     sv.kinematics = o.str("kinematics", "finite-strain");
     sv.continuity = o.str("continuity", "");  // "": the formulation's default (after resolve_formulation)
     sv.escaped_water = o.str("escaped_water", "keep");
+    sv.drag_integration = o.str("drag_integration", "");  // "": resolved by formulation in parse()
     sv.checkpoint_every = static_cast<int>(o.num("checkpoint_every", 50.0));
     const Obj st = check_object(c_, o.ok("stabilisation") ? o.get("stabilisation") : json::object(),
                                 o.at("stabilisation"), {&stabilisation_table()});
@@ -2459,6 +2473,7 @@ nlohmann::json to_json(const Scene& s) {
                    {"pressure", sv.stabilisation.pressure},
                    {"fbar", sv.stabilisation.fbar},
                    {"fbar_patch", sv.stabilisation.fbar_patch}}}};
+  if (!sv.drag_integration.empty()) j["solver"]["drag_integration"] = sv.drag_integration;  // semi-implicit only
   return j;
 }
 

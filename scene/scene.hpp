@@ -177,6 +177,9 @@ struct Solver {
   // Double-point water points that have left the soil (outside its volume, past a drained free
   // surface): keep | remove (an outflow into an unmodelled reservoir; docs/formulations.md)
   std::string escaped_water = "keep";
+  // Semi-implicit formulations: the drag of the predictor implicit in the water velocity only
+  // (semi-implicit, seed 001 eqs. 52-53) or in both phases' velocities (implicit, the default).
+  std::string drag_integration;  // "" until parse resolves it by formulation
   Stabilisation stabilisation;
   int checkpoint_every = 50;     // steps between in-memory snapshots of the last good state
 };

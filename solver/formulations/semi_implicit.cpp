@@ -102,6 +102,7 @@ class SemiImplicit final : public Formulation<Dim> {
         fbar_(s, grid_) {
     conservative_ = s.solver.continuity != "non-conservative";  // "" (unset): this formulation's default
     remove_escaped_ = double_point_ && s.solver.escaped_water == "remove";
+    implicit_drag_ = s.solver.drag_integration != "semi-implicit";  // "" (unset): the default, implicit
     const auto& st = s.solver.stabilisation;
     if (st.pressure == "node-remap") remap_ = Remap::node;
     else if (st.pressure == "mfvp-linear") remap_ = Remap::linear;
@@ -173,6 +174,8 @@ class SemiImplicit final : public Formulation<Dim> {
     node_.assign(nodes, NodeExtra{});
     support_.resize(nodes);
     p_node_.assign(nodes, 0.0);
+    A_soil_.assign(nodes, Vec<Dim>::Zero());
+    A_water_.assign(nodes, Vec<Dim>::Zero());
     for (std::size_t i = 0; i < nodes; ++i) support_[i] = support_integral(i);
     D_solid_.assign(nodes * KD, Vec<Dim>::Zero());
     D_water_.assign(nodes * KD, Vec<Dim>::Zero());
@@ -493,10 +496,18 @@ class SemiImplicit final : public Formulation<Dim> {
     });
   }
 
-  /// (3)-(4) per node, with v^t = M v / M and Q = g n M_w / k (eq. 58):
-  ///   (M_w + dt Q) v_w* = M_w v_w^t + dt (f_w - G^w p^t + Q v_s^t)          (eq. 53)
-  ///   M_s (v_s* - v_s^t) = dt (f_s - G^s p^t) + dt Q (v_w* - v_s^t)          (eq. 52 minus eq. 53)
-  /// then the velocity boundary conditions of each phase on v*. The pressure force is the strong
+  /// (3)-(4) per node, with v^t = M v / M and Q = g n M_w / k (eq. 58), a = dt Q,
+  /// A_w = M_w v_w^t + dt (f_w - G^w p^t), A_s = M_s v_s^t + dt (f_s - G^s p^t):
+  ///   semi-implicit (seed 001 eqs. 52-53): (M_w + a) v_w* = A_w + a v_s^t,
+  ///                                        M_s v_s* = A_s + a (v_w* - v_s^t);
+  ///   implicit (default):  (M_w + a) v_w* - a v_s* = A_w,  (M_s + a) v_s* - a v_w* = A_s,
+  ///     det = M_w M_s + a (M_w + M_s), v_w* = ((M_s + a) A_w + a A_s) / det,
+  ///     v_s* = ((M_w + a) A_s + a A_w) / det.
+  /// Both conserve the mixture's momentum. Without forces the seed's form maps the relative velocity
+  /// r = v_w - v_s to r M_w (1 - a / M_s) / (M_w + a), |.| -> M_w / M_s for a stiff drag: it
+  /// diverges at nodes with much more water than soil (free water over soil, a seepage exit);
+  /// the implicit form maps r to r / (1 + a / M_w + a / M_s) (docs/formulations.md, "Implicit drag").
+  /// Then the velocity boundary conditions of each phase on v*. The pressure force is the strong
   /// form -sum_p c V S_K grad p^t(x_p) of the nodal p^t (eqs. 55, 57 integrated by parts), i.e.
   /// the operator G of the corrections (6): see docs/formulations.md, "B-splines", for why the
   /// weak form sum_p c V p_p grad S_K of the paper is unstable with B-splines.
@@ -524,13 +535,39 @@ class SemiImplicit final : public Formulation<Dim> {
       soil_.vL[i] = vs;
       water_.vL[i] = vw;
       e.drag = has_s && has_w && e.k > 0.0 ? dt * g_earth * e.n * w.m / e.k : 0.0;  // Q dt
-      const Vec<Dim> vw_star = has_w ? Vec<Dim>((w.m * vw + dt * w.f + e.drag * vs) / (w.m + e.drag)) : Vec<Dim>::Zero();
       const Vec<Dim> fs = local_damping<Dim>(s.f, vs, alpha);
-      soil_.v[i] = has_s ? Vec<Dim>(vs + (dt * fs + e.drag * (vw_star - vs)) / s.m) : Vec<Dim>::Zero();
-      water_.v[i] = vw_star;
+      if (implicit_drag_ && e.drag > 0.0) {
+        const double a = e.drag, det = w.m * s.m + a * (w.m + s.m);
+        const Vec<Dim> Aw = w.m * vw + dt * w.f, As = s.m * vs + dt * fs;
+        water_.v[i] = ((s.m + a) * Aw + a * As) / det;
+        soil_.v[i] = ((w.m + a) * As + a * Aw) / det;
+        A_water_[i] = Aw;
+        A_soil_[i] = As;
+      } else {
+        const Vec<Dim> vw_star =
+            has_w ? Vec<Dim>((w.m * vw + dt * w.f + e.drag * vs) / (w.m + e.drag)) : Vec<Dim>::Zero();
+        soil_.v[i] = has_s ? Vec<Dim>(vs + (dt * fs + e.drag * (vw_star - vs)) / s.m) : Vec<Dim>::Zero();
+        water_.v[i] = vw_star;
+      }
     });
     bcs_solid_.apply(grid_, box_, soil_.v, false);
-    bcs_fluid_.apply(grid_, box_, water_.v, false);
+    if (implicit_drag_) {
+      // A constrained component is known: the other phase takes it from its own equation,
+      // (M_w + a) v_w* = A_w + a v_s*, then (M_s + a) v_s* = A_s + a v_w* (both identities of the
+      // coupled solution where nothing is constrained), each followed by its phase's conditions.
+      grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+        const double a = node_[i].drag;
+        if (a > 0.0) water_.v[i] = (A_water_[i] + a * soil_.v[i]) / (water_.acc[i].m + a);
+      });
+      bcs_fluid_.apply(grid_, box_, water_.v, false);
+      grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+        const double a = node_[i].drag;
+        if (a > 0.0) soil_.v[i] = (A_soil_[i] + a * water_.v[i]) / (soil_.acc[i].m + a);
+      });
+      bcs_solid_.apply(grid_, box_, soil_.v, false);
+    } else {
+      bcs_fluid_.apply(grid_, box_, water_.v, false);
+    }
   }
 
   /// (5) eqs. 60-63 in swmpm's signs (docs/formulations.md):
@@ -1017,6 +1054,7 @@ class SemiImplicit final : public Formulation<Dim> {
   std::vector<Permeability> scene_perm_;    // per solid material, as the scene gives it
   bool tie_ = false;                        // initialisation: water points follow their soil points
   bool conservative_ = false;               // solver.continuity = conservative (solve_pressure)
+  bool implicit_drag_ = true;               // solver.drag_integration (predictor)
   bool remove_escaped_ = false;             // solver.escaped_water = remove (double-point)
   std::vector<char> escaped_;               // per water point, this step (reused)
   long escaped_points_ = 0;                 // removed so far
@@ -1031,6 +1069,7 @@ class SemiImplicit final : public Formulation<Dim> {
   std::vector<NodeExtra> node_;
   std::vector<double> support_;  // per node: integral of its basis function over the grid
   std::vector<double> p_node_;   // Pa, per node: p^t from the linear projection of the points' pressures
+  std::vector<Vec<Dim>> A_soil_, A_water_;  // per node: M v^t + dt f of each phase (implicit drag)
   Poisson poisson_;
   std::vector<Vec<Dim>> D_solid_, D_water_;  // per node: row I of D^s, D^w over the D stencil
   std::array<long, KD> d_steps_{};

@@ -169,11 +169,15 @@ TEST(SemiImplicitHardCases, FreeStandingBlockWithBsplinesStaysBoundedAndSmooth) 
 // The B3 slope under the gravity ramp, both variants with bspline2 and double-point with GIMP
 // (on db60629 both exploded within ~10 steps). Bounds: p below the total overburden at the base,
 // rho_sat g 20 m = 373 kPa (incompressible constituents: the ramp is carried undrained at first),
-// a smooth p field, and p >= -2 % of it (measured, bspline2: min 0, max 297 kPa, checkerboard
-// 0.002; GIMP double-point: min -1.2 kPa, checkerboard 0.003). GIMP used to grow a suction of
-// -38 to -95 kPa one cell below the toe surface from 0.3 s, from the ill-posed linear fits of
-// nodes whose support holds a strip of water (docs/formulations.md, "Free-surface nodes with an
-// ill-posed fit"); this test allowed -40 % until that fix.
+// a smooth p field, and p >= -3 % of it. The toe moves out at 0.6 m/s by 0.5 s and draws a
+// suction: single-point bspline2 converges in dt to a p_min of -8.1 to -8.7 kPa (-2.3 %; dt/16,
+// either drag form). Measured at the test's dt with the implicit drag (2026-12-02): bspline2
+// double-point -4.4 kPa, single-point -8.5 kPa, max 294 kPa, checkerboard 0.002; GIMP
+// double-point -2.8 kPa, checkerboard 0.003 (the seed's semi-implicit drag gave min 0 for
+// bspline2 at this dt: it resolves the suction only at dt/4 and below). GIMP used to grow a
+// suction of -38 to -95 kPa one cell below the toe surface from 0.3 s, from the ill-posed linear
+// fits of nodes whose support holds a strip of water (docs/formulations.md, "Free-surface nodes
+// with an ill-posed fit"); this test allowed -40 % until that fix.
 TEST(SemiImplicitHardCases, SlopeUnderGravityStaysBounded) {
   const double bound = swmpm::testing::kB3SlopeBaseOverburden;
   struct Case {
@@ -184,7 +188,7 @@ TEST(SemiImplicitHardCases, SlopeUnderGravityStaysBounded) {
     const FieldStats r = run_field(slope(c.formulation, c.shape), "si-slope-" + c.shape + "-" + c.formulation, 1.5);
     EXPECT_EQ(r.status, "completed") << c.shape << " " << c.formulation;
     EXPECT_LT(r.p_max, bound) << c.shape << " " << c.formulation;
-    EXPECT_GT(r.p_min, -0.02 * bound) << c.shape << " " << c.formulation;
+    EXPECT_GT(r.p_min, -0.03 * bound) << c.shape << " " << c.formulation;
     EXPECT_LT(r.checker, 0.05) << c.shape << " " << c.formulation;
   }
 }
@@ -196,9 +200,13 @@ TEST(SemiImplicitHardCases, SlopeUnderGravityStaysBounded) {
 // the nodes one cell above the crest surface (water in one row of points at the edge of their
 // support, leverage 1e3 - 1e4) amplified the points' pressure noise x2.6 per step from t = 0.50 s:
 // +-300 kPa along the crest at 0.53 s, "solid particle left the grid" at 0.555 s. Bounds on 0-0.7 s:
-// completes, p within [-5 %, 100 %] of the total overburden at the base, |v_s| < 3 m/s (the
-// sliding crest: 1.4 m/s at 0.5 s), a smooth p field (measured with the fix: p in [-9.3, 172] kPa,
-// max |v_s| 1.76 m/s, checkerboard 0.005).
+// completes, p within [-20 %, 100 %] of the total overburden at the base, |v_s| < 3 m/s (the
+// sliding crest: 1.4 m/s at 0.5 s), a smooth p field. When the block starts, the toe draws a
+// suction whose converged value is about -22 kPa (-6 %): the water points' p_min at 0.1 / 0.2 s
+// is -57.7 / -62.4 kPa at dt, -24.3 / -26.9 at dt/4 and -21.5 / -23.4 at dt/16 with the implicit
+// drag (default), and -4.4 / -3.6, -13.4 / -17.5, -18.6 / -21.7 with the seed's semi-implicit
+// drag (2026-12-02). Measured at dt with the implicit drag: p in [-65.8, 172] kPa; the seed's
+// drag gave [-9.3, 172] kPa, max |v_s| 1.76 m/s, checkerboard 0.005.
 TEST(SemiImplicitHardCases, DoublePointCrestSurfaceStaysBounded) {
   json s = slope("semi-implicit-double-point", "bspline2");
   s.erase("gravity_ramp");
@@ -210,7 +218,7 @@ TEST(SemiImplicitHardCases, DoublePointCrestSurfaceStaysBounded) {
   const FieldStats r = run_field(s, "si-slope-dp-crest", 1.5);
   EXPECT_EQ(r.status, "completed");
   EXPECT_LT(r.p_max, bound);
-  EXPECT_GT(r.p_min, -0.05 * bound);
+  EXPECT_GT(r.p_min, -0.2 * bound);
   EXPECT_LT(r.v_max, 3.0);
   EXPECT_LT(r.checker, 0.05);
 }
@@ -255,4 +263,86 @@ TEST(SemiImplicitHardCases, LargeStrainColumnOnBsplinesNeedsTheModifiedFbar) {
   EXPECT_GT(none.n_max, 0.25);
   EXPECT_GT(modified.n_min, 0.10);
   EXPECT_LT(modified.n_max, 0.22);
+}
+
+namespace {
+
+/// A saturated bed (1 m wide, 0.4 m deep, E = 10 MPa, geostatic k0 = 0.5) under 0.2 m of free
+/// water, both hydrostatic from the pond's surface, double-point with bspline2, dt at 0.9 of the
+/// soil CFL. The nodes along the bed's surface hold far more water than soil.
+json pond_over_bed(double k, const std::string& drag) {
+  json s = {{"name", "pond-over-bed"},
+            {"dimension", 2},
+            {"formulation", "semi-implicit-double-point"},
+            {"gravity", {0.0, -9.81}},
+            {"grid", {{"cell_size", 0.05}, {"min", {0.0, 0.0}}, {"max", {1.0, 0.8}}, {"shape_function", "bspline2"}}},
+            {"materials",
+             {{{"name", "sand"}, {"model", "linear-elastic"}, {"grain_density", 2650.0}, {"porosity", 0.4},
+               {"youngs_modulus", 1e7}, {"poisson_ratio", 0.3}, {"hydraulic_conductivity", k}},
+              {{"name", "water"}, {"model", "fluid"}, {"density", 1000.0}, {"bulk_modulus", 2.2e9}}}},
+            {"bodies",
+             {{{"name", "bed"},
+               {"geometry", {{"type", "box"}, {"min", {0.0, 0.0}}, {"max", {1.0, 0.4}}}},
+               {"solid", "sand"},
+               {"fluid", "water"},
+               {"particles_per_cell", 2},
+               {"initial", {{"stress", "geostatic"}, {"k0", 0.5}, {"pore_pressure", "hydrostatic"}, {"water_table", 0.6}}}},
+              {{"name", "pond"},
+               {"geometry", {{"type", "box"}, {"min", {0.0, 0.4}}, {"max", {1.0, 0.6}}}},
+               {"fluid", "water"},
+               {"particles_per_cell", 2},
+               {"initial", {{"pore_pressure", "hydrostatic"}, {"water_table", 0.6}}}}}},
+            {"boundaries",
+             {{{"on", "x_min"}, {"solid", "roller"}, {"fluid", "impermeable"}},
+              {{"on", "x_max"}, {"solid", "roller"}, {"fluid", "impermeable"}},
+              {{"on", "y_min"}, {"solid", "fixed"}, {"fluid", "impermeable"}}}},
+            {"time", {{"end", 0.5}, {"cfl", 0.9}}},
+            {"output", {{"interval", 0.25}}}};
+  if (!drag.empty()) s["solver"] = {{"drag_integration", drag}};
+  return s;
+}
+
+}  // namespace
+
+// Free water over soil (a submerged bed, the water over a landslide's toe, a seepage exit): the
+// seed's predictor (solver.drag_integration "semi-implicit", eqs. 52-53) takes the water's drag
+// implicitly but the soil's from v_s^t, which maps the relative velocity r to
+// r M_w (1 - a/M_s) / (M_w + a) (a = dt Q): x 10-20 per step at the bed's surface nodes, where
+// M_w / M_s is large. The implicit drag (default) maps r to r / (1 + a/M_w + a/M_s) for any masses.
+// Measured (2026-12-02): semi-implicit diverges by the energy check in 20 steps (k = 1e-3) and
+// 10 steps (k = 1e-5); implicit keeps the bed at rest for 0.5 s at both k (|v_s| < 1e-5 m/s;
+// the pond's top row of water points moves 2.6-4.4 mm/s, its free surface on B-splines; p in the
+// bed's lowest cell 0.4-0.7 % off hydrostatic).
+TEST(SemiImplicitHardCases, FreeWaterOverSoilNeedsTheImplicitDrag) {
+  for (const double k : {1e-3, 1e-5}) {
+    int rc = 0;
+    const std::string seed = swmpm::testing::run_scene(pond_over_bed(k, "semi-implicit"), "si-pond-semi", 0, &rc);
+    const auto rs = swmpm::testing::load_json(seed + "/run.json");
+    EXPECT_EQ(rs["status"], "diverged") << "k = " << k;
+    EXPECT_LT(rs["steps"].get<long>(), 100) << "k = " << k;
+
+    const std::string run = swmpm::testing::run_scene(pond_over_bed(k, ""), "si-pond-implicit");
+    const auto rj = swmpm::testing::load_json(run + "/run.json");
+    ASSERT_EQ(rj["status"], "completed") << "k = " << k;
+    const auto soil = swmpm::testing::last_frame(run), water = swmpm::testing::last_frame(run, "fluid");
+    auto speed = [](const swmpm::scene::PointCloud& f) {
+      const auto& v = f.get("velocity", "last").values;
+      double m = 0.0;
+      for (std::size_t a = 0; a < f.size(); ++a) m = std::max(m, std::hypot(v[3 * a], v[3 * a + 1]));
+      return m;
+    };
+    const double vs_max = speed(soil), vw_max = speed(water);
+    double p_err = 0.0;
+    // Water points in the bed's lowest cell: p against rho_w g (0.6 m - y).
+    const auto& p = water.get("pore_pressure", "last").values;
+    for (std::size_t a = 0; a < water.size(); ++a)
+      if (water.points[a][1] < 0.05)
+        p_err = std::max(p_err, std::abs(p[a] / (1000.0 * 9.81 * (0.6 - water.points[a][1])) - 1.0));
+    std::printf("pond over bed, k = %g: semi-implicit %s after %ld steps; implicit max |v_s| %.3g m/s, max |v_w| %.3g "
+                "m/s, base p error %.4f\n",
+                k, rs["status"].get<std::string>().c_str(), rs["steps"].get<long>(), vs_max, vw_max, p_err);
+    EXPECT_LT(vs_max, 1e-4) << "k = " << k;  // the bed at rest
+    EXPECT_LT(vw_max, 1e-2) << "k = " << k;  // the pond's top row of points settles a few mm/s
+    EXPECT_LT(p_err, 0.01) << "k = " << k;
+  }
 }

@@ -472,6 +472,12 @@ TEST(SceneErrors, UnknownEnumerationValuesListTheValidOnes) {
   json u = scene_2d();  // only the double-point water points can leave
   u["solver"]["escaped_water"] = "remove";
   EXPECT_TRUE(reports(u, "/solver/escaped_water", "applies to the water points of semi-implicit-double-point"));
+  json v = scene_2d();  // the predictor's drag belongs to the semi-implicit formulations
+  v["solver"]["drag_integration"] = "implicit";
+  EXPECT_TRUE(reports(v, "/solver/drag_integration", "applies to the semi-implicit formulations' predictor"));
+  v["formulation"] = "semi-implicit-double-point";
+  v["solver"]["drag_integration"] = "explicit";
+  EXPECT_TRUE(reports(v, "/solver/drag_integration", "expected one of: implicit, semi-implicit"));
   // The conservative continuity belongs to the two-phase formulations (explicit-single-point too).
   json c = scene_2d();
   c["solver"]["continuity"] = "conservative";
