@@ -18,8 +18,9 @@
 //       water mass and momentum (eqs. 50-51), effective-stress and body forces
 //   (5a)-(5b) L, D_s, D_w (eqs. 61-63, L symmetric: c(n) inside the quadrature), the nodal p^t
 //       (linear projection of the points' pressures), free-surface and drained nodes
-//   (3)-(4) water predictor with the drag implicit in v_w* (eq. 53), soil predictor (eq. 52), with
-//       the pressure force -G p^t of the same gradient operator G as the corrections; BCs
+//   (3)-(4) water and soil predictors (eqs. 52-53) with the drag implicit in both velocities (the
+//       seed's form, implicit in v_w* only, with solver.drag_integration = semi-implicit) and the
+//       pressure force -G p^t of the same gradient operator G as the corrections; BCs
 //   (5c) pressure increment: L dp = -(1/dt) [D_s v_s* + D_w v_w*] (eq. 60), p^{t+1} = p_D on
 //       free-surface / drained nodes; CHOLMOD
 //   (6) corrections v^{t+1} = v* - dt/M (G dp) (eqs. 64-68, G the strong gradient S_K grad S_J);
@@ -305,7 +306,8 @@ class SemiImplicit final : public Formulation<Dim> {
     }
     std::ostringstream os;
     os << "soil P-wave CFL (c = " << c_max << " m/s with the saturated density, |v|max = " << v_max
-       << " m/s); the pore pressure is implicit and the drag semi-implicit, so neither K_w nor k limits dt";
+       << " m/s); the pore pressure is implicit and the drag " << (implicit_drag_ ? "implicit" : "semi-implicit")
+       << ", so neither K_w nor k limits dt";
     reason = os.str();
     return grid_.h() / (c_max + v_max);
   }
