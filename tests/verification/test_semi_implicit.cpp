@@ -190,16 +190,19 @@ TEST(SemiImplicit, E1NodeRemapDisturbsTheLayer) {
 // E1 with B-splines: the pressure field is exact (the linear fit reproduces the hydrostatic field
 // at every node, the extrapolated free-surface nodes included), but point quadrature of the
 // effective stress is not exact where a support is cut by the free surface or by the clamped
-// knots, so the layer moves a little and settles. Measured over 0.3 s: bspline2 p error 0.12 % of
-// rho_w g H, |v_s| 6.4e-5 m/s, |v_w| 5.6e-5 (single-point) / 8.3e-6 m/s (double-point); bspline3
-// 0.25 %, 9.9e-4 m/s (its 4-node-wide support is under-integrated by 2x2 points per cell, as in
-// explicit-single-point: 4.1e-3 m/s).
+// knots, so the layer moves a little and settles. Measured over 0.3 s (frames every 0.05 s, implicit
+// drag, 2026-12-02): bspline2 p error 0.13 % of rho_w g H, |v_s| 1.9e-4 m/s, |v_w| 1.8e-4
+// (single-point) / 1.4e-5 m/s (double-point); bspline3 0.37 %, 1.4e-3 m/s (its 4-node-wide support
+// is under-integrated by 2x2 points per cell, as in explicit-single-point: 4.1e-3 m/s). Sampled
+// every 0.01 s the single-point bspline2 speed peaks at 2.8e-4 m/s at 0.02 s with either drag form
+// and decays to 1e-5 m/s by 0.3 s and 2e-8 m/s by 3 s: hence 5e-4 (the seed's drag read 6.4e-5 at
+// the 0.05 s frames only because of where they fall).
 TEST(SemiImplicit, E1BsplinesNearlyAtRest) {
   for (const std::string f : {"semi-implicit-single-point", "semi-implicit-double-point"}) {
     const Rest b2 = run_e1(f, "mfvp-linear", "e1-b2-" + f, "bspline2");
     EXPECT_LT(b2.p_max, 0.005) << f;
-    EXPECT_LT(b2.v_s, 2e-4) << f;
-    EXPECT_LT(b2.v_w, 2e-4) << f;
+    EXPECT_LT(b2.v_s, 5e-4) << f;
+    EXPECT_LT(b2.v_w, 5e-4) << f;
     const Rest b3 = run_e1(f, "mfvp-linear", "e1-b3-" + f, "bspline3");
     EXPECT_LT(b3.p_max, 0.01) << f;
     EXPECT_LT(b3.v_s, 3e-3) << f;
