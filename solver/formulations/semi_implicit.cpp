@@ -1038,9 +1038,20 @@ class SemiImplicit final : public Formulation<Dim> {
 
  public:
   std::vector<typename Formulation<Dim>::Counter> counters() const override {
-    if (!remove_escaped_) return {};
-    return {{"escaped_water_points", static_cast<double>(escaped_points_), "water points removed (solver.escaped_water)"},
-            {"escaped_water_mass", escaped_mass_, "kg (per metre in 2D)"}};
+    // The pressure solver's work (pressure_poisson.hpp): how often the unknown node set changed
+    // (new pattern and symbolic analysis), numeric factorisations, and CG iterations preconditioned
+    // by an older factor on the other steps.
+    std::vector<typename Formulation<Dim>::Counter> c = {
+        {"pressure_pattern_builds", static_cast<double>(poisson_.pattern_builds()),
+         "new sparsity patterns of L (the set of unknown nodes changed)"},
+        {"pressure_factorisations", static_cast<double>(poisson_.factorisations()), "CHOLMOD numeric factorisations"},
+        {"pressure_cg_iterations", static_cast<double>(poisson_.cg_iterations()),
+         "conjugate-gradient iterations preconditioned by an older factor"}};
+    if (remove_escaped_) {
+      c.push_back({"escaped_water_points", static_cast<double>(escaped_points_), "water points removed (solver.escaped_water)"});
+      c.push_back({"escaped_water_mass", escaped_mass_, "kg (per metre in 2D)"});
+    }
+    return c;
   }
 
  private:
