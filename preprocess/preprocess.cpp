@@ -283,7 +283,7 @@ scene::PointCloud seed_solid(const scene::Scene& s) { return seed_phases(s).soli
 namespace {
 
 /// Switches a scene may set that the chosen formulation does not use yet: rejected rather than
-/// silently ignored. Checked on the file as written (the resolved scene has every default).
+/// silently ignored. Checked on the file as written (the resolved scene leaves them out).
 void reject_unused_switches(const std::string& scene_path, const scene::Scene& s) {
   if (s.formulation == scene::Formulation::explicit_single_point)
     for (std::size_t k = 0; k < s.materials.size(); ++k)
@@ -295,34 +295,29 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
   const auto raw = nlohmann::json::parse(in, nullptr, false);
   if (raw.is_discarded() || !raw.contains("solver")) return;
   const auto& solver = raw["solver"];
-  const bool semi_implicit = s.formulation == scene::Formulation::semi_implicit_single_point ||
-                             s.formulation == scene::Formulation::semi_implicit_double_point;
-  if (semi_implicit && solver.contains("stabilisation") && solver["stabilisation"].value("strain_smoothing", false))
-    throw std::runtime_error(scene_path + ": /solver/stabilisation/strain_smoothing: cell-average strain smoothing "
-                             "belongs to explicit-single-point (seed 000); the semi-implicit formulations use the "
-                             "pressure projection (and F-bar); remove the key or set it to false");
   const auto stab = solver.contains("stabilisation") && solver["stabilisation"].is_object() ? solver["stabilisation"]
                                                                                                : nlohmann::json::object();
-  if (stab.contains("fbar_patch") && s.solver.stabilisation.fbar != "modified")
+  // One rule with the resolved scene (scene::reads_switch), which leaves these keys out.
+  const bool dry = s.formulation == scene::Formulation::dry;
+  if (stab.contains("strain_smoothing") && !scene::reads_switch(s, "strain_smoothing") &&
+      (dry || stab.value("strain_smoothing", false)))
+    throw std::runtime_error(scene_path + ": /solver/stabilisation/strain_smoothing: cell-average strain smoothing "
+                             "belongs to explicit-single-point (seed 000); " +
+                             std::string(dry ? "the dry formulation has no pore pressure and uses F-bar "
+                                               "(solver.stabilisation.fbar); remove the key"
+                                             : "the other formulations use the pressure projection (and F-bar); "
+                                               "remove the key or set it to false"));
+  if (stab.contains("fbar_patch") && !scene::reads_switch(s, "fbar_patch"))
     throw std::runtime_error(scene_path + ": /solver/stabilisation/fbar_patch: the patch size is read only by the "
                              "modified F-bar (fbar is \"" + s.solver.stabilisation.fbar +
                              "\"); remove the key or set fbar to \"modified\"");
-  if (s.formulation == scene::Formulation::dry) {
-    // F-bar (fbar, fbar_patch) acts on the skeleton of every formulation; the rest is pore pressure
-    // (pressure) or explicit-single-point's cell smoothing (strain_smoothing).
-    for (const char* key : {"strain_smoothing", "pressure"})
-      if (stab.contains(key))
-        throw std::runtime_error(scene_path + ": /solver/stabilisation/" + key + ": the dry formulation has no pore "
-                                 "pressure to stabilise and no strain smoothing (F-bar is solver.stabilisation.fbar); "
-                                 "remove the key");
-    bool plastic = false;  // mohr-coulomb and nor-sand read solver.kinematics (nor-sand: finite-strain only)
-    for (const auto& m : s.materials)
-      plastic = plastic || m.model == scene::MaterialModel::mohr_coulomb || m.model == scene::MaterialModel::nor_sand;
-    if (solver.contains("kinematics") && !plastic)
-      throw std::runtime_error(scene_path + ": /solver/kinematics: the dry formulation's kinematics follow the material "
-                               "(linear-elastic: Jaumann rate, hencky: finite strain; only mohr-coulomb and nor-sand read the "
-                               "switch); remove the key");
-  }
+  if (stab.contains("pressure") && !scene::reads_switch(s, "pressure"))
+    throw std::runtime_error(scene_path + ": /solver/stabilisation/pressure: the dry formulation has no pore "
+                             "pressure to stabilise (F-bar is solver.stabilisation.fbar); remove the key");
+  if (solver.contains("kinematics") && !scene::reads_switch(s, "kinematics"))
+    throw std::runtime_error(scene_path + ": /solver/kinematics: the dry formulation's kinematics follow the material "
+                             "(linear-elastic: Jaumann rate, hencky: finite strain; only mohr-coulomb and nor-sand read the "
+                             "switch); remove the key");
 }
 
 }  // namespace

@@ -2361,6 +2361,22 @@ Scene load_scene(const std::string& path) {
   }
 }
 
+bool reads_switch(const Scene& s, const std::string& key) {
+  const bool dry = s.formulation == Formulation::dry;
+  if (key == "strain_smoothing") return s.formulation == Formulation::explicit_single_point;
+  if (key == "pressure") return !dry;
+  if (key == "fbar_patch") return s.solver.stabilisation.fbar == "modified";
+  if (key == "kinematics") {
+    // mohr-coulomb and nor-sand read it (nor-sand: finite strain only); the dry formulation's
+    // other models follow their own kinematics (linear-elastic: Jaumann rate, hencky: finite).
+    if (!dry) return true;
+    for (const auto& m : s.materials)
+      if (m.model == MaterialModel::mohr_coulomb || m.model == MaterialModel::nor_sand) return true;
+    return false;
+  }
+  return true;
+}
+
 nlohmann::json to_json(const Scene& s) {
   const int dim = s.dimension;
   json j;
@@ -2464,15 +2480,15 @@ nlohmann::json to_json(const Scene& s) {
   const Solver& sv = s.solver;
   j["solver"] = {{"flip", sv.flip},
                  {"damping", sv.damping},
-                 {"kinematics", sv.kinematics},
                  {"continuity", sv.continuity},
                  {"escaped_water", sv.escaped_water},
                  {"checkpoint_every", sv.checkpoint_every},
-                 {"stabilisation",
-                  {{"strain_smoothing", sv.stabilisation.strain_smoothing},
-                   {"pressure", sv.stabilisation.pressure},
-                   {"fbar", sv.stabilisation.fbar},
-                   {"fbar_patch", sv.stabilisation.fbar_patch}}}};
+                 {"stabilisation", {{"fbar", sv.stabilisation.fbar}}}};
+  if (reads_switch(s, "kinematics")) j["solver"]["kinematics"] = sv.kinematics;
+  json& stab = j["solver"]["stabilisation"];
+  if (reads_switch(s, "strain_smoothing")) stab["strain_smoothing"] = sv.stabilisation.strain_smoothing;
+  if (reads_switch(s, "pressure")) stab["pressure"] = sv.stabilisation.pressure;
+  if (reads_switch(s, "fbar_patch")) stab["fbar_patch"] = sv.stabilisation.fbar_patch;
   if (!sv.drag_integration.empty()) j["solver"]["drag_integration"] = sv.drag_integration;  // semi-implicit only
   return j;
 }

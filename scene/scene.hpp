@@ -237,8 +237,15 @@ class SceneError : public std::runtime_error {
 Scene load_scene(const std::string& path);
 /// Same, from a JSON value; `label` names the source in messages.
 Scene parse_scene(const nlohmann::json& j, const std::string& label);
-/// The scene with every default filled in, as JSON that parse_scene accepts again.
+/// The scene with every default filled in, as JSON that parse_scene (and `swmpm preprocess`)
+/// accepts again. Switches the scene's formulation does not read are left out (see
+/// reads_switch), since preprocess rejects them when a file sets them.
 nlohmann::json to_json(const Scene& s);
+
+/// Whether the scene's formulation reads the solver switch `key` ("strain_smoothing",
+/// "pressure", "fbar_patch", "kinematics"; any other key: true). One rule for to_json and for
+/// preprocess's rejection of switches a scene sets in vain.
+bool reads_switch(const Scene& s, const std::string& key);
 
 /// Particle face bits: bits 0-5 are the axis faces (2 axis + side); bit kFirstSurfaceBit + k is the
 /// k-th entry of surface_bit_names(), the distinct named surfaces the scene refers to.
