@@ -16,8 +16,10 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -82,11 +84,23 @@ class PressurePoisson {
     dp_.assign(n, 0.0);
     role_.assign(n, inactive);
     eq_.assign(n, -1);
+    member_.assign(n, 0);
+    last_unknown_.assign(n, std::numeric_limits<long>::min() / 2);
   }
 
-  /// Zeroes the rows, right-hand sides and roles of the nodes in `box`.
+  /// Zeroes the rows, right-hand sides and roles of the nodes in `box`, and of those in the box
+  /// cleared last (nodes the points have left), so that no node outside `box` holds a former
+  /// step's row, role or increment (solve() reads its neighbours' rows and roles).
   void clear(const Grid<Dim>& g, const NodeBox<Dim>& box) {
-    g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
+    NodeBox<Dim> both = box;
+    if (cleared_any_)
+      for (int a = 0; a < Dim; ++a) {
+        both.lo[a] = std::min(both.lo[a], cleared_.lo[a]);
+        both.hi[a] = std::max(both.hi[a], cleared_.hi[a]);
+      }
+    cleared_ = box;
+    cleared_any_ = true;
+    g.parallel_for_each_node(both, [&](std::size_t i, const auto&) {
       std::fill_n(stencil_.data() + i * K, K, 0.0);
       rhs_[i] = 0.0;
       dp_[i] = 0.0;
@@ -112,32 +126,52 @@ class PressurePoisson {
   /// nodes get 0). Returns false when L is not positive definite (a part of the water touches no
   /// prescribed node: its pressure is undetermined).
   bool solve(const Grid<Dim>& g, const NodeBox<Dim>& box) {
-    // One equation per node with water, unknown or prescribed, in increasing flat node index (the
-    // stencil walks rows in that order too, so every CSC column comes out sorted). A prescribed
-    // node's equation is the identity with a zero right-hand side, decoupled from the others (its
-    // known increment moves to its neighbours' right-hand sides, as before); its dp_ is not
-    // overwritten. So the pattern, and CHOLMOD's symbolic analysis, change only when the set of
-    // nodes with water changes, not each time a node passes between unknown and prescribed (a
-    // free surface moving through the supports).
-    equations_.clear();
+    // The equations: every unknown node, and the prescribed nodes that were unknown within the
+    // last kStickySteps solves, in increasing flat node index (the stencil walks rows in that
+    // order too, so every CSC column comes out sorted). A prescribed node's equation is the
+    // identity with a zero right-hand side, decoupled from the others (its known increment moves
+    // to its neighbours' right-hand sides, like any prescribed node's); its dp_ is not
+    // overwritten. So a node passing back and forth between unknown and prescribed (a free
+    // surface moving through the supports) keeps its equation and the pattern, and CHOLMOD's
+    // symbolic analysis, stay; while nodes that stay prescribed (drained faces, a settled
+    // surface) leave the system at the next rebuild and do not enlarge the factor.
+    // The pattern is rebuilt only when an unknown node has no equation, or a node with an
+    // equation has lost its water or left the step's box (its role would be a former step's).
+    ++solves_;
     int unknown_nodes = 0;
+    bool rebuild = pattern_nodes_.empty();
     g.for_each_node(box, [&](std::size_t i, const auto&) {
-      if (role_[i] != inactive) {
-        eq_[i] = static_cast<int>(equations_.size());
-        equations_.push_back(static_cast<int>(i));
-        unknown_nodes += role_[i] == unknown;
-      } else {
-        eq_[i] = -1;
-      }
+      if (role_[i] != unknown) return;
+      ++unknown_nodes;
+      last_unknown_[i] = solves_;
+      rebuild = rebuild || !member_[i];
     });
     unknown_count_ = unknown_nodes;
-    const int n = static_cast<int>(equations_.size());
     if (unknown_nodes == 0) return true;
-    // Entries join equation nodes only, all inside `box`: the pattern does not depend on the box.
-    if (equations_ != pattern_nodes_) {
+    if (!rebuild)
+      for (const int I : pattern_nodes_) {
+        const auto ijk = ijk_of(static_cast<std::size_t>(I));
+        bool inside = true;
+        for (int a = 0; a < Dim; ++a) inside = inside && ijk[a] >= box.lo[a] && ijk[a] <= box.hi[a];
+        if (!inside || role_[static_cast<std::size_t>(I)] == inactive) {
+          rebuild = true;
+          break;
+        }
+      }
+    if (rebuild) {
+      for (const int I : pattern_nodes_) member_[static_cast<std::size_t>(I)] = 0;
+      equations_.clear();
+      g.for_each_node(box, [&](std::size_t i, const auto&) {
+        const bool keep = role_[i] == unknown || (role_[i] == prescribed && solves_ - last_unknown_[i] <= kStickySteps);
+        eq_[i] = keep ? static_cast<int>(equations_.size()) : -1;
+        if (!keep) return;
+        equations_.push_back(static_cast<int>(i));
+        member_[i] = 1;
+      });
       box_ = box;
       build_pattern();
     }
+    const int n = static_cast<int>(equations_.size());
     double* values = A_.valuePtr();
     const std::size_t nnz = gather_.size();
     for (std::size_t e = 0; e < nnz; ++e) {
@@ -197,6 +231,7 @@ class PressurePoisson {
 
  private:
   static constexpr int kMaxIterations = 10;
+  static constexpr long kStickySteps = 100;   // solves a formerly unknown node keeps its equation
   static constexpr int kMaxAge = 50;          // steps
   static constexpr double kTolerance = 1e-10;  // relative residual |b - L x| / |b|
 
@@ -276,6 +311,11 @@ class PressurePoisson {
   std::vector<double> rhs_, dp_;
   std::vector<std::uint8_t> role_;
   std::vector<int> eq_, equations_, pattern_nodes_;
+  std::vector<std::uint8_t> member_;  // per node: has an equation in the current pattern
+  std::vector<long> last_unknown_;    // per node: the solve at which it was last unknown
+  long solves_ = 0;
+  NodeBox<Dim> cleared_{};  // the box of the last clear()
+  bool cleared_any_ = false;
   int unknown_count_ = 0;
   NodeBox<Dim> box_{};  // the box while the pattern is built (nodes outside it hold stale eq_)
   std::vector<std::size_t> gather_;                   // per CSC entry: its slot in stencil_
