@@ -305,8 +305,9 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
                              "belongs to explicit-single-point (seed 000); " +
                              std::string(dry ? "the dry formulation has no pore pressure and uses F-bar "
                                                "(solver.stabilisation.fbar); remove the key"
-                                             : "the other formulations use the pressure projection (and F-bar); "
-                                               "remove the key or set it to false"));
+                                             : scene::to_string(s.formulation) +
+                                                   " does not read it (its stabilisation switches are pressure and "
+                                                   "fbar); remove the key or set it to false"));
   if (stab.contains("fbar_patch") && !scene::reads_switch(s, "fbar_patch"))
     throw std::runtime_error(scene_path + ": /solver/stabilisation/fbar_patch: the patch size is read only by the "
                              "modified F-bar (fbar is \"" + s.solver.stabilisation.fbar +

@@ -791,7 +791,7 @@ class SemiImplicit final : public Formulation<Dim> {
     });
     // Row r's pairs. Slots are compile-time (kRowSlot, kColumnSlot); with r a constant too (2D,
     // below) both inner loops unroll completely and every entry is a constant offset from its
-    // row's start (B4 6^2: scatter 2433 -> 1627 instructions per point-step, results bitwise equal).
+    // row's start (B4 6^2: scatter 2433 -> 1588 instructions per point-step, results bitwise equal).
     auto pairs_of_row = [&](int r) __attribute__((always_inline)) {
       double* lrow = poisson_.row(node[r]) + kRowSlot[r];
       const Vec<Dim> g = cl * grad[r];
