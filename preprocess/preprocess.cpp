@@ -5,6 +5,8 @@
 #include <fstream>
 #include <iostream>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -285,12 +287,13 @@ namespace {
 /// Switches a scene may set that the chosen formulation does not use yet: rejected rather than
 /// silently ignored. Checked on the file as written (the resolved scene leaves them out).
 void reject_unused_switches(const std::string& scene_path, const scene::Scene& s) {
+  // A scene error (exit 2, one line naming the file and the JSON pointer), like the parser's.
+  const auto reject = [&](const std::string& line) { throw scene::SceneError({scene_path + ": " + line}); };
   if (s.formulation == scene::Formulation::explicit_single_point)
     for (std::size_t k = 0; k < s.materials.size(); ++k)
       if (s.materials[k].model != scene::MaterialModel::fluid && s.materials[k].permeability_law != "constant")
-        throw std::runtime_error(scene_path + ": /materials/" + std::to_string(k) + "/permeability_law: \"" +
-                                 s.materials[k].permeability_law +
-                                 "\" is not implemented in explicit-single-point yet (constant permeability only)");
+        reject("/materials/" + std::to_string(k) + "/permeability_law: \"" + s.materials[k].permeability_law +
+               "\" is not implemented in explicit-single-point yet (constant permeability only)");
   std::ifstream in(scene_path);
   const auto raw = nlohmann::json::parse(in, nullptr, false);
   if (raw.is_discarded() || !raw.contains("solver")) return;
@@ -301,24 +304,22 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
   const bool dry = s.formulation == scene::Formulation::dry;
   if (stab.contains("strain_smoothing") && !scene::reads_switch(s, "strain_smoothing") &&
       (dry || stab.value("strain_smoothing", false)))
-    throw std::runtime_error(scene_path + ": /solver/stabilisation/strain_smoothing: cell-average strain smoothing "
-                             "belongs to explicit-single-point (seed 000); " +
-                             std::string(dry ? "the dry formulation has no pore pressure and uses F-bar "
-                                               "(solver.stabilisation.fbar); remove the key"
-                                             : scene::to_string(s.formulation) +
-                                                   " does not read it (its stabilisation switches are pressure and "
-                                                   "fbar); remove the key or set it to false"));
+    reject("/solver/stabilisation/strain_smoothing: cell-average strain smoothing belongs to explicit-single-point "
+           "(seed 000); " +
+           std::string(dry ? "the dry formulation has no pore pressure and uses F-bar (solver.stabilisation.fbar); "
+                             "remove the key"
+                           : scene::to_string(s.formulation) +
+                                 " does not read it (its stabilisation switches are pressure and fbar); remove the "
+                                 "key or set it to false"));
   if (stab.contains("fbar_patch") && !scene::reads_switch(s, "fbar_patch"))
-    throw std::runtime_error(scene_path + ": /solver/stabilisation/fbar_patch: the patch size is read only by the "
-                             "modified F-bar (fbar is \"" + s.solver.stabilisation.fbar +
-                             "\"); remove the key or set fbar to \"modified\"");
+    reject("/solver/stabilisation/fbar_patch: the patch size is read only by the modified F-bar (fbar is \"" +
+           s.solver.stabilisation.fbar + "\"); remove the key or set fbar to \"modified\"");
   if (stab.contains("pressure") && !scene::reads_switch(s, "pressure"))
-    throw std::runtime_error(scene_path + ": /solver/stabilisation/pressure: the dry formulation has no pore "
-                             "pressure to stabilise (F-bar is solver.stabilisation.fbar); remove the key");
+    reject("/solver/stabilisation/pressure: the dry formulation has no pore pressure to stabilise (F-bar is "
+           "solver.stabilisation.fbar); remove the key");
   if (solver.contains("kinematics") && !scene::reads_switch(s, "kinematics"))
-    throw std::runtime_error(scene_path + ": /solver/kinematics: the dry formulation's kinematics follow the material "
-                             "(linear-elastic: Jaumann rate, hencky: finite strain; only mohr-coulomb and nor-sand read the "
-                             "switch); remove the key");
+    reject("/solver/kinematics: the dry formulation's kinematics follow the material (linear-elastic: Jaumann rate, "
+           "hencky: finite strain; only mohr-coulomb and nor-sand read the switch); remove the key");
 }
 
 }  // namespace
@@ -329,13 +330,13 @@ std::string preprocess(const std::string& scene_path, const std::string& out_dir
   // Everything is built in memory first, so a failure writes nothing.
   const Phases phases = seed_phases(s);
   if (phases.solid.size() == 0 && phases.fluid.size() == 0 && phases.notes.empty())
-    throw std::runtime_error(scene_path + ": /bodies: no particle was seeded (are the bodies inside the grid?)");
+    throw scene::SceneError({scene_path + ": /bodies: no particle was seeded (are the bodies inside the grid?)"});
 
   const fs::path dir = out_dir.empty() ? fs::path("runs") / s.name : fs::path(out_dir);
   fs::create_directories(dir / "particles");
   std::ofstream(dir / "scene.json") << scene::to_json(s).dump(2) << "\n";
   if (!quiet) std::cout << "preprocess: formulation " << scene::to_string(s.formulation) << " (" << s.formulation_reason << ")\n";
-  const bool pore_fluid_on_solid = phases.solid.find("pore_pressure") != nullptr;
+  const bool pore_fluid_on_solid = phases.solid.find("fluid_mass") != nullptr;  // single-point (double-point: water points in fluid.vtu)
   for (const auto& [phase, cloud] : {std::pair{"solid", &phases.solid}, std::pair{"fluid", &phases.fluid},
                                      std::pair{"surfaces", &phases.surfaces}}) {
     const fs::path file = dir / "particles" / (std::string(phase) + ".vtu");

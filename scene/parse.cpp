@@ -1012,7 +1012,10 @@ const Table& monitor_table() {
           {.name = "particle", .type = Type::integer, .range = at_least(0),
            .meaning = "Or follow this particle id (not with `at`)."},
           {.name = "phase", .type = Type::choice, .def = "solid", .values = {"solid", "fluid"},
-           .meaning = "Which phase's particle (`fluid` needs a fluid in the scene)."},
+           .meaning = "Which phase's particle (`fluid` needs a fluid in the scene). In the double-point formulations "
+                      "every point monitor follows a soil point, whatever `phase` says: the soil points carry the "
+                      "water's pore pressure and velocity interpolated from the water points (docs/architecture.md), "
+                      "and the log names the soil particle followed."},
           {.name = "quantities", .type = Type::choices, .required = true, .values = all_quantities(),
            .meaning = "What to record; see [monitor rules](#monitor-rules) for which need what.", .nonempty = true},
       }};
@@ -2317,6 +2320,9 @@ Scene parse_scene(const nlohmann::json& j, const std::string& label) {
 }
 
 Scene load_scene(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw SceneError({path + ": is a directory, expected a scene file (JSON)"});
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     throw SceneError({path + ": cannot read the scene file (" + std::strerror(errno) + ")"});

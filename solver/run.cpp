@@ -43,6 +43,13 @@ class Log {
     file_.flush();
     if (!quiet_) std::cout << s << std::endl;
   }
+  /// A failure (diverged, interrupted): log.txt, and one line on stderr even when quiet
+  /// (interface.md §1: a failing command says why on stderr).
+  void failure(const std::string& s) {
+    file_ << s << "\n";
+    file_.flush();
+    std::cerr << "swmpm: " << s << std::endl;
+  }
 
  private:
   std::ofstream file_;
@@ -179,6 +186,7 @@ class Runner {
       return true;
     };
 
+    double time_carry = 0.0;  // Kahan compensation of state_.time
     while (state_.time < end - eps_t) {
       if (g_interrupted) {
         status = "interrupted";
@@ -191,7 +199,12 @@ class Runner {
         dt = *scene_.time.dt;
       }
       const double dt_stable = dt;  // before the last step is shortened to land on time.end (or on 0)
-      dt = std::min(dt, (initialising ? 0.0 : end) - state_.time);
+      // Land on the phase's end (time.end, or 0 after the initialisation): a step that reaches it,
+      // or falls short of it only by the round-off of the summed steps (t = 1 - 2e-12 after 1e5
+      // steps of 1e-5 s), ends exactly there; no sliver step follows.
+      const double target = initialising ? 0.0 : end;
+      const bool lands = target - state_.time <= dt * (1.0 + 1e-6);
+      if (lands) dt = target - state_.time;
       StepContext ctx{load_clock(state_.time), dt, gravity_at(state_.time)};
       formulation->step(state_, ctx);
       if (!state_.health.ok()) {
@@ -206,7 +219,14 @@ class Runner {
         power = power_end;
         work_max = std::max(work_max, work);
       }
-      state_.time += dt;
+      if (lands) {
+        state_.time = target;
+        time_carry = 0.0;
+      } else {  // compensated (Kahan) sum: t stays within round-off of the exact sum of the steps
+        const double y = dt - time_carry, t_new = state_.time + y;
+        time_carry = (t_new - state_.time) - y;
+        state_.time = t_new;
+      }
       ++state_.step;
       dt_min = std::min(dt_min, dt_stable);
       dt_max = std::max(dt_max, dt_stable);
@@ -214,6 +234,7 @@ class Runner {
       bool phase_ended = false;
       if (initialising && state_.time >= -eps_t) {  // t = 0: the analysis starts from this state
         state_.time = 0.0;
+        time_carry = 0.0;
         initialising = false;
         phase_ended = true;
         formulation->set_initialisation(state_, nullptr);
@@ -267,7 +288,7 @@ class Runner {
     if (tty) std::fprintf(stderr, "\r%*s\r", 90, "");
 
     if (status == "diverged") {
-      log_.line("DIVERGED: " + diagnosis);
+      log_.failure("DIVERGED: " + diagnosis);
       // Every frame written so far passed the checks; the snapshot is newer only if it was taken
       // after the last frame. Either way the series ends with the last good state, in time order.
       if (frames_.empty() || last_good_time > frames_.back().time) {
@@ -283,7 +304,7 @@ class Runner {
                 std::to_string(state_.step + 1));
     } else if (status == "interrupted") {
       write_frame(state_.time);
-      log_.line("interrupted at t = " + fmt(state_.time) + " s; wrote the current state as the final frame");
+      log_.failure("interrupted at t = " + fmt(state_.time) + " s; wrote the current state as the final frame");
     } else if (frames_.empty() || frames_.back().time < state_.time - eps_t) {
       write_frame(state_.time);
     }
@@ -343,9 +364,12 @@ class Runner {
             << " in the time loop, " << threads_ << " threads)";
     log_.line(summary.str());
     std::ostringstream split;
-    split << "stages:";
     double total = 0.0;
     for (double s : st.seconds) total += s;
+    // Shares of the stages' sum; the stages cover the formulation's step only, so say how much of
+    // the loop that is (the rest: frames, monitors, energy checks, time-step control).
+    split << "stages (" << fmt(100.0 * total / std::max(loop_wall, 1e-300), 3)
+          << "% of the time loop; the rest writes frames and monitors and checks energy):";
     for (std::size_t k = 0; k < st.names.size(); ++k)
       split << " " << st.names[k] << " " << fmt(100.0 * st.seconds[k] / std::max(total, 1e-300), 3) << "%";
     log_.line(split.str());
