@@ -11,7 +11,8 @@ microseconds per particle-step (run.json's loop_us_per_particle_step: all points
 paper counts them), the split among stages, and the run's status.
 
 Usage: bench/slope_cost.py [--swmpm build/app/swmpm] [--ppc 6,8,10,12] [--threads 2]
-                           [--end 6] [--shape gimp] [--out bench/results/slope-cost-<date>.md]
+                           [--end 6] [--shape gimp] [--side-by-side]
+                           [--out bench/results/slope-cost-<date>.md]
 """
 import argparse, datetime, json, os, platform, subprocess, sys, tempfile
 
@@ -38,17 +39,33 @@ def scene(ppc, formulation, end, shape):
     return s
 
 
-def run(swmpm, s, threads, workdir):
+def prepare(swmpm, s, workdir):
     path = os.path.join(workdir, s["name"] + ".json")
     with open(path, "w") as f:
         json.dump(s, f)
     out = os.path.join(workdir, s["name"])
     subprocess.run([swmpm, "preprocess", path, "-o", out, "-q"], check=True)
-    rc = subprocess.run([swmpm, "solve", out, "--threads", str(threads), "-q"]).returncode
+    return out
+
+
+def result(out, rc):
     with open(os.path.join(out, "run.json")) as f:
         r = json.load(f)
     r["rc"] = rc
     return r
+
+
+def run(swmpm, s, threads, workdir):
+    out = prepare(swmpm, s, workdir)
+    return result(out, subprocess.run([swmpm, "solve", out, "--threads", str(threads), "-q"]).returncode)
+
+
+def run_side_by_side(swmpm, scenes, threads, workdir):
+    """Solves the scenes at the same time (one process each): on a machine whose speed drifts (a
+    shared VM), both variants then see the same load, and their ratio is what is compared."""
+    outs = [prepare(swmpm, s, workdir) for s in scenes]
+    procs = [subprocess.Popen([swmpm, "solve", out, "--threads", str(threads), "-q"]) for out in outs]
+    return [result(out, p.wait()) for out, p in zip(outs, procs)]
 
 
 def main():
@@ -59,13 +76,19 @@ def main():
     ap.add_argument("--end", type=float, default=6.0)
     ap.add_argument("--shape", default="gimp")
     ap.add_argument("--out", default="")
+    ap.add_argument("--side-by-side", action="store_true",
+                    help="solve single- and double-point at the same time (needs 2 x threads cores)")
     a = ap.parse_args()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for ppc in [int(x) for x in a.ppc.split(",")]:
             res = {}
-            for form in ("semi-implicit-single-point", "semi-implicit-double-point"):
-                r = run(a.swmpm, scene(ppc, form, a.end, a.shape), a.threads, tmp)
+            forms = ("semi-implicit-single-point", "semi-implicit-double-point")
+            if a.side_by_side:
+                done = dict(zip(forms, run_side_by_side(a.swmpm, [scene(ppc, f, a.end, a.shape) for f in forms],
+                                                        a.threads, tmp)))
+            for form in forms:
+                r = done[form] if a.side_by_side else run(a.swmpm, scene(ppc, form, a.end, a.shape), a.threads, tmp)
                 pts = r["particles"]["solid"] + r["particles"].get("fluid", 0)
                 res[form] = (pts, r["steps"], r["loop_seconds"], r["loop_us_per_particle_step"], r["status"],
                              r.get("stage_seconds", {}))
@@ -78,7 +101,8 @@ def main():
             cpu = next(l.split(":", 1)[1].strip() for l in f if l.startswith("model name"))
     except (OSError, StopIteration):
         pass
-    lines = [f"# B4: semi-implicit slope cost ({datetime.date.today()}, {cpu}, {a.threads} threads, {a.shape})", "",
+    mode = ", single- and double-point solved side by side" if a.side_by_side else ""
+    lines = [f"# B4: semi-implicit slope cost ({datetime.date.today()}, {cpu}, {a.threads} threads, {a.shape}{mode})", "",
              f"Mohr-Coulomb slope of examples/slope-stability-mohr-coulomb at cell 1.0 m, dt 0.004 s, 1 s "
              f"initialisation + {a.end:g} s; points = soil + water (the paper counts both). Paper: seed 001 "
              f"Table 4, 6 s (1500 steps) on one Ryzen 9 5950X core; its µs/particle-step = CPU s / (points × 1500).",
