@@ -4,14 +4,16 @@
 // Each node I keeps the row of L in a dense stencil of (2R + 1)^Dim coefficients (the nodes that
 // can share a particle with it: R = S - 1 for shape functions of support S). Particles scatter into these rows
 // through the stripe schedule (race-free, fixed order), so assembly builds no triplets and sorts
-// nothing. The CSC matrix (lower triangle) has one equation per node with water: an unknown node's
-// row of L, or the identity for a prescribed node (its known increment goes to its neighbours'
-// right-hand sides); it is filled from the stencils by a gather map. Its pattern and CHOLMOD's
-// symbolic analysis are rebuilt only when the set of nodes with water changes, not when a node
-// passes between unknown and prescribed as a free surface moves (B5 reduced, double-point: 2222
-// rebuilds in 8334 steps when keyed on the unknown set, 29 now), and reused otherwise. The numeric factorisation is reused too, as the
-// preconditioner of conjugate gradients on later steps' L (which changes only as the points move):
-// refactorised when CG needs more than kMaxIterations or the factor is kMaxAge steps old.
+// nothing. The CSC matrix (lower triangle) has an equation for every unknown node (its row of L)
+// and for every prescribed node that was unknown within the last kStickySteps solves (the
+// identity; its known increment goes to its neighbours' right-hand sides); it is filled from the
+// stencils by a gather map. Its pattern and CHOLMOD's symbolic analysis are rebuilt only when an
+// unknown node has no equation or a node with one has lost its water, not when a node passes
+// back and forth between unknown and prescribed as a free surface moves (B5 reduced, 1 + 1 s:
+// 2222 rebuilds when keyed on the unknown set, 6 now), and reused otherwise. The numeric
+// factorisation is reused too, as the preconditioner of conjugate gradients on later steps' L
+// (which changes only as the points move): refactorised when CG needs more than kMaxIterations or
+// the factor is kMaxAge steps old.
 #pragma once
 
 #include <Eigen/CholmodSupport>
@@ -93,13 +95,11 @@ class PressurePoisson {
   /// step's row, role or increment (solve() reads its neighbours' rows and roles).
   void clear(const Grid<Dim>& g, const NodeBox<Dim>& box) {
     NodeBox<Dim> both = box;
-    if (cleared_any_)
-      for (int a = 0; a < Dim; ++a) {
-        both.lo[a] = std::min(both.lo[a], cleared_.lo[a]);
-        both.hi[a] = std::max(both.hi[a], cleared_.hi[a]);
-      }
+    for (int a = 0; a < Dim; ++a) {
+      both.lo[a] = std::min(both.lo[a], cleared_.lo[a]);
+      both.hi[a] = std::max(both.hi[a], cleared_.hi[a]);
+    }
     cleared_ = box;
-    cleared_any_ = true;
     g.parallel_for_each_node(both, [&](std::size_t i, const auto&) {
       std::fill_n(stencil_.data() + i * K, K, 0.0);
       rhs_[i] = 0.0;
@@ -136,7 +136,8 @@ class PressurePoisson {
     // symbolic analysis, stay; while nodes that stay prescribed (drained faces, a settled
     // surface) leave the system at the next rebuild and do not enlarge the factor.
     // The pattern is rebuilt only when an unknown node has no equation, or a node with an
-    // equation has lost its water or left the step's box (its role would be a former step's).
+    // equation has lost its water (a node outside the step's box has too: clear() leaves every
+    // node outside the box inactive).
     ++solves_;
     int unknown_nodes = 0;
     bool rebuild = pattern_nodes_.empty();
@@ -149,15 +150,8 @@ class PressurePoisson {
     unknown_count_ = unknown_nodes;
     if (unknown_nodes == 0) return true;
     if (!rebuild)
-      for (const int I : pattern_nodes_) {
-        const auto ijk = ijk_of(static_cast<std::size_t>(I));
-        bool inside = true;
-        for (int a = 0; a < Dim; ++a) inside = inside && ijk[a] >= box.lo[a] && ijk[a] <= box.hi[a];
-        if (!inside || role_[static_cast<std::size_t>(I)] == inactive) {
-          rebuild = true;
-          break;
-        }
-      }
+      rebuild = std::any_of(pattern_nodes_.begin(), pattern_nodes_.end(),
+                            [&](int I) { return role_[static_cast<std::size_t>(I)] == inactive; });
     if (rebuild) {
       for (const int I : pattern_nodes_) member_[static_cast<std::size_t>(I)] = 0;
       equations_.clear();
@@ -296,6 +290,12 @@ class PressurePoisson {
     analysed_ = false;
     ++pattern_builds_;
   }
+  static NodeBox<Dim> empty_box() {
+    NodeBox<Dim> b;
+    b.lo.fill(std::numeric_limits<int>::max());
+    b.hi.fill(std::numeric_limits<int>::min());
+    return b;
+  }
   std::array<int, Dim> ijk_of(std::size_t i) const {
     std::array<int, Dim> ijk;
     for (int a = 0; a < Dim; ++a) {
@@ -314,8 +314,7 @@ class PressurePoisson {
   std::vector<std::uint8_t> member_;  // per node: has an equation in the current pattern
   std::vector<long> last_unknown_;    // per node: the solve at which it was last unknown
   long solves_ = 0;
-  NodeBox<Dim> cleared_{};  // the box of the last clear()
-  bool cleared_any_ = false;
+  NodeBox<Dim> cleared_ = empty_box();  // the box of the last clear()
   int unknown_count_ = 0;
   NodeBox<Dim> box_{};  // the box while the pattern is built (nodes outside it hold stale eq_)
   std::vector<std::size_t> gather_;                   // per CSC entry: its slot in stencil_
