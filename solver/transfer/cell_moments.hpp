@@ -1,0 +1,222 @@
+// Exact assembly of the semi-implicit pressure operators from per-cell moments of the points
+// (2D; shape functions that are one polynomial per cell: Linear and the B-splines).
+//
+// The operators of the pressure Poisson equation (seed 001 eqs. 61-63) are sums over points of
+// products of shape functions:
+//   L_IJ  = sum_p cl_p grad S_I(x_p) . grad S_J(x_p)
+//   D^s_IK = sum_p cs_p S_I(x_p) grad S_K(x_p),   D^w_IK = sum_p cw_p S_I(x_p) grad S_K(x_p)
+// Inside one cell every 1D factor of S_I = w_s(xi) w_t(eta) is a polynomial of degree P in the
+// cell's local coordinates (xi, eta) in [0, 1)^2 (the B-splines' knots are the cell faces), so each
+// product above is a polynomial of degree <= 2P per axis, and its sum over the cell's points is a
+// fixed linear combination of the cell's weighted moments
+//   M^c_mn = sum_{p in cell} c_p xi_p^m eta_p^n,   m, n = 0 .. 2P.
+// A point then adds (2P + 1)^2 products per weight (25 for quadratic B-splines) instead of visiting
+// the (P + 1)^4 node pairs of its support (81), and each cell turns its moments into its node pairs
+// once, by sum factorisation (axis 1 first, then axis 0). The result equals the point-wise sums up
+// to rounding (tests/unit/test_cell_moments.cpp).
+//
+// Determinism: points add to their own cell only, in StripeSchedule order (a cell lies in one
+// stripe, so one thread, one order); cells are reduced stripe by stripe in two colours along axis
+// 0 (a cell touches S node columns, so stripes of S cells two apart never share a node), in a fixed
+// order inside a stripe. The sums do not depend on the number of threads.
+#pragma once
+
+#include <omp.h>
+
+#include <Eigen/Dense>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "solver/grid/grid.hpp"
+#include "solver/shape/shape.hpp"
+
+namespace swmpm::transfer {
+
+template <class Shape>
+class CellMoments {
+ public:
+  static constexpr int S = Shape::support;  // nodes per axis of a cell's support
+  static constexpr int P = Shape::degree;
+  static constexpr int Q = 2 * P + 1;       // moment orders per axis: 0 .. 2P
+  static constexpr int QQ = Q * Q;
+  static constexpr int NP = S * S;          // nodes of a cell's support (x fastest)
+  static_assert(S == P + 1, "cell moments need shape functions that are one polynomial per cell");
+
+  /// One cell's share of the operators, as matrices over the axis pairs: entry (p0, p1) with
+  /// p0 = s0 S + t0 (axis 0: row node s0, column node t0) and p1 = s1 S + t1 (axis 1). The node
+  /// pair (r, k) of the cell's support (x fastest: r = s0 + S s1, k = t0 + S t1) is read with the
+  /// accessors. L holds every pair; the caller takes the ones it stores.
+  using PairMatrix = Eigen::Matrix<double, S * S, S * S, Eigen::RowMajor>;
+  struct CellOperators {
+    PairMatrix L, Dsx, Dsy, Dwx, Dwy;
+    static int p0(int r, int k) { return (r % S) * S + k % S; }
+    static int p1(int r, int k) { return (r / S) * S + k / S; }
+    double l(int r, int k) const { return L(p0(r, k), p1(r, k)); }
+    Vec<2> ds(int r, int k) const { return Vec<2>(Dsx(p0(r, k), p1(r, k)), Dsy(p0(r, k), p1(r, k))); }
+    Vec<2> dw(int r, int k) const { return Vec<2>(Dwx(p0(r, k), p1(r, k)), Dwy(p0(r, k), p1(r, k))); }
+  };
+
+  explicit CellMoments(const Grid<2>& g) : nn_(g.nodes_per_axis()) {
+    for (int a = 0; a < 2; ++a) build_axis(g.axis(a), tables_[a]);
+    moments_.assign(static_cast<std::size_t>(nn_[0]) * nn_[1] * 3 * QQ, 0.0);
+  }
+
+  /// Adds one point at x in the cell whose first node is `base` (ShapeData::base): the weights of
+  /// D^s (cs, m^3 in 2D per metre), D^w (cw) and L (cl). Sets whose flag is off are skipped.
+  template <bool kSoil, bool kWater>
+  [[gnu::always_inline]] void add(const Grid<2>& g, const std::array<int, 2>& base, const Vec<2>& x, double cs,
+                                  double cw, double cl) {
+    const Axis& ax = g.axis(0);
+    const Axis& ay = g.axis(1);
+    const double xi = (x[0] - ax.origin) / ax.h - base[0];
+    const double eta = (x[1] - ay.origin) / ay.h - base[1];
+    double px[Q], py[Q];
+    px[0] = 1.0;
+    py[0] = 1.0;
+    for (int m = 1; m < Q; ++m) {
+      px[m] = px[m - 1] * xi;
+      py[m] = py[m - 1] * eta;
+    }
+    double v[QQ];  // xi^m eta^n, m major
+    for (int m = 0; m < Q; ++m)
+      for (int n = 0; n < Q; ++n) v[m * Q + n] = px[m] * py[n];
+    double* M = moments_.data() + cell_index(base) * 3 * QQ;
+    if constexpr (kSoil)
+      for (int i = 0; i < QQ; ++i) M[kSoilSet * QQ + i] += cs * v[i];
+    if constexpr (kWater)
+      for (int i = 0; i < QQ; ++i) M[kWaterSet * QQ + i] += cw * v[i];
+    for (int i = 0; i < QQ; ++i) M[kLaplaceSet * QQ + i] += cl * v[i];
+  }
+
+  /// Turns the moments of every cell with points into its node pairs, calls
+  /// out(first node's flat index, const CellOperators&) once per such cell, and zeroes the moments
+  /// for the next step. `box` is the step's node box (every point's support lies in it).
+  template <class Out>
+  void reduce(const NodeBox<2>& box, Out&& out) {
+    if (box.empty()) return;
+    const int b0_lo = box.lo[0], b0_hi = box.hi[0] - (S - 1);
+    const int b1_lo = box.lo[1], b1_hi = box.hi[1] - (S - 1);
+    if (b0_hi < b0_lo || b1_hi < b1_lo) return;
+    const int stripes = (b0_hi - b0_lo) / S + 1;
+    for (int colour = 0; colour < 2; ++colour) {
+#pragma omp parallel for schedule(dynamic, 1) if (stripes > 2)
+      for (int s = colour; s < stripes; s += 2) {
+        CellOperators op;
+        for (int b1 = b1_lo; b1 <= b1_hi; ++b1)
+          for (int b0 = b0_lo + s * S; b0 <= std::min(b0_hi, b0_lo + s * S + S - 1); ++b0) {
+            const std::array<int, 2> base{b0, b1};
+            double* M = moments_.data() + cell_index(base) * 3 * QQ;
+            if (M[kSoilSet * QQ] == 0.0 && M[kWaterSet * QQ] == 0.0 && M[kLaplaceSet * QQ] == 0.0) continue;
+            cell_operators(tables_[0][b0], tables_[1][b1], M, op);
+            std::fill_n(M, 3 * QQ, 0.0);
+            out(cell_index(base), op);
+          }
+      }
+    }
+  }
+
+ private:
+  static constexpr int kSoilSet = 0, kWaterSet = 1, kLaplaceSet = 2;
+
+  /// One axis and one cell: coefficients in xi of the products of the cell's S 1D functions,
+  /// pair (s, t) = s * S + t: w_s w_t, w_s dw_t, dw_s dw_t (dw in 1/m).
+  using PairPoly = Eigen::Matrix<double, S * S, Q, Eigen::RowMajor>;  // row: pair, column: power
+  struct AxisCell {
+    PairPoly ww, wd, dd;
+  };
+
+  std::size_t cell_index(const std::array<int, 2>& base) const {
+    return static_cast<std::size_t>(base[1]) * nn_[0] + base[0];
+  }
+
+  /// The S functions of each cell as polynomials in xi: sampled at S points and interpolated
+  /// (exact: each is one polynomial of degree P on the cell), checked against the policy's own
+  /// derivative.
+  static void build_axis(const Axis& ax, std::vector<AxisCell>& cells) {
+    cells.assign(ax.cells, AxisCell{PairPoly::Zero(), PairPoly::Zero(), PairPoly::Zero()});
+    for (int c = 0; c < ax.cells; ++c) {
+      Eigen::Matrix<double, S, S> V;
+      Eigen::Matrix<double, S, S> W;  // W(j, s): w_s at sample j
+      std::array<double, S> xs;
+      for (int j = 0; j < S; ++j) {
+        xs[j] = (j + 0.5) / S;
+        const double x = ax.origin + (c + xs[j]) * ax.h;
+        int base = 0;
+        double w[S], dw[S];
+        Shape::eval(ax, x, 0.0, base, w, dw);
+        if (base != c)
+          throw std::logic_error("cell moments: shape function's first node " + std::to_string(base) + " is not cell " +
+                                 std::to_string(c));
+        for (int m = 0; m < S; ++m) V(j, m) = std::pow(xs[j], m);
+        for (int s = 0; s < S; ++s) W(j, s) = w[s];
+      }
+      const Eigen::Matrix<double, S, S> coef = V.fullPivLu().solve(W);  // coef(m, s): xi^m of w_s
+      double wc[S][S] = {}, dc[S][S] = {};                           // [s][m]; dc in 1/m
+      for (int s = 0; s < S; ++s)
+        for (int m = 0; m < S; ++m) {
+          wc[s][m] = coef(m, s);
+          if (m + 1 < S) dc[s][m] = (m + 1) * coef(m + 1, s) / ax.h;
+        }
+      // The derivative of the interpolant must be the policy's derivative (same polynomial).
+      for (int j = 0; j < S; ++j) {
+        int base = 0;
+        double w[S], dw[S];
+        Shape::eval(ax, ax.origin + (c + xs[j]) * ax.h, 0.0, base, w, dw);
+        for (int s = 0; s < S; ++s) {
+          double d = 0.0;
+          for (int m = S - 2; m >= 0; --m) d = d * xs[j] + dc[s][m];
+          if (std::abs(d - dw[s]) > 1e-9 / ax.h)
+            throw std::logic_error("cell moments: shape function is not one polynomial per cell");
+        }
+      }
+      AxisCell& out = cells[c];
+      for (int s = 0; s < S; ++s)
+        for (int t = 0; t < S; ++t) {
+          const int pair = s * S + t;
+          out.ww.row(pair).setZero();
+          out.wd.row(pair).setZero();
+          out.dd.row(pair).setZero();
+          for (int m = 0; m < S; ++m)
+            for (int n = 0; n < S; ++n) {
+              out.ww(pair, m + n) += wc[s][m] * wc[t][n];
+              out.wd(pair, m + n) += wc[s][m] * dc[t][n];
+              out.dd(pair, m + n) += dc[s][m] * dc[t][n];
+            }
+        }
+    }
+  }
+
+  /// Sum factorisation of one cell, with the moments M (m: power of xi, n: power of eta):
+  ///   L   = sum_mn M^l_mn (dd0[p0]_m ww1[p1]_n + ww0[p0]_m dd1[p1]_n)
+  ///   D_x = sum_mn M^c_mn wd0[p0]_m ww1[p1]_n,   D_y = sum_mn M^c_mn ww0[p0]_m wd1[p1]_n   (c = s, w)
+  /// First over n (A = M Y^T: powers of xi by axis-1 pairs), then over m (X A): small fixed-size
+  /// products, 3780 multiply-adds per cell for quadratic B-splines.
+  static void cell_operators(const AxisCell& X, const AxisCell& Y, const double* M, CellOperators& op) {
+    using Moment = Eigen::Matrix<double, Q, Q, Eigen::RowMajor>;
+    using Half = Eigen::Matrix<double, Q, S * S>;
+    const Eigen::Map<const Moment> Ms(M + kSoilSet * QQ), Mw(M + kWaterSet * QQ), Ml(M + kLaplaceSet * QQ);
+    // lazyProduct: coefficient-wise loops the compiler unrolls (Eigen's GEMM kernel is slower at
+    // these sizes).
+    Half a, b;
+    a.noalias() = Ml.lazyProduct(Y.ww.transpose());
+    b.noalias() = Ml.lazyProduct(Y.dd.transpose());
+    op.L.noalias() = X.dd.lazyProduct(a) + X.ww.lazyProduct(b);
+    a.noalias() = Ms.lazyProduct(Y.ww.transpose());
+    b.noalias() = Ms.lazyProduct(Y.wd.transpose());
+    op.Dsx.noalias() = X.wd.lazyProduct(a);
+    op.Dsy.noalias() = X.ww.lazyProduct(b);
+    a.noalias() = Mw.lazyProduct(Y.ww.transpose());
+    b.noalias() = Mw.lazyProduct(Y.wd.transpose());
+    op.Dwx.noalias() = X.wd.lazyProduct(a);
+    op.Dwy.noalias() = X.ww.lazyProduct(b);
+  }
+
+  std::array<int, 2> nn_;
+  std::array<std::vector<AxisCell>, 2> tables_;
+  std::vector<double> moments_;  // per cell (indexed by its first node): soil, water, L sets of QQ
+};
+
+}  // namespace swmpm::transfer
