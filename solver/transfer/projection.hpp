@@ -134,11 +134,12 @@ class NodeProjection {
       blk[NH] -= shift;
     }
   }
-  /// The projected field at a point with shape data sd at x (only nodes with weight count).
+  /// The projected field at a point with shape data sd at x, a point of the last fit's box. Only
+  /// nodes with weight count: fit() zeroes every block of its box and leaves a node without
+  /// weight at a_I = 0, so no test per node is needed.
   double at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x) const {
     double value = 0.0;
     for_each_node_offset(g, sd, x, [&](std::size_t i, double N, const VecQ& q) {
-      if (N <= 0.0 || !has(i)) return;
       value += N * q.dot(Eigen::Map<const VecQ>(blocks_.data() + i * NB + NH));
     });
     return value;
@@ -147,7 +148,9 @@ class NodeProjection {
  private:
   double* block(std::size_t i) { return blocks_.data() + i * NB; }
 
-  /// fn(node, N_Ip, Q(d)) over a point's nodes in for_each_node's order.
+  /// fn(node, N_Ip, Q(d)) over a point's nodes in for_each_node's order (and with its N_Ip:
+  /// wx[a] times the row's weight). Row by row (shape::for_each_row): the row's offsets along
+  /// y (and z) are set once per row, x's once per node, with no index arithmetic per node.
   template <class Fn>
   static void for_each_node_offset(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x,
                                    Fn&& fn) {
@@ -157,16 +160,18 @@ class NodeProjection {
       for (int k = 0; k < S; ++k) off[a][k] = (x[a] - g.axis(a).node_x[sd.base[a] + k]) * inv_h;
     VecQ q;
     q[0] = 1.0;
-    shape::for_each_node(g, sd, [&, k = 0](std::size_t i, double N, const Vec<Dim>&) mutable {
+    int b = 0, c = 0;  // the row's node along y (and z)
+    shape::for_each_row(g, sd, [&](std::size_t row, double w_r, const auto&) {
       if constexpr (Order == 1) {
-        int r = k;
-        for (int a = 0; a < Dim; ++a) {
-          q[1 + a] = off[a][r % S];
-          r /= S;
-        }
+        q[2] = off[1][b];
+        if constexpr (Dim == 3) q[3] = off[2][c];
       }
-      ++k;
-      fn(i, N, q);
+#pragma GCC unroll 4
+      for (int a = 0; a < S; ++a) {
+        if constexpr (Order == 1) q[1] = off[0][a];
+        fn(row + a, sd.w[0][a] * w_r, q);
+      }
+      if (++b == S) b = 0, ++c;
     });
   }
 
