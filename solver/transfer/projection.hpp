@@ -58,7 +58,7 @@ class NodeProjection {
     schedule.run([&](int p) {
       const double w = weight(p), f = value(p);
       if (w == 0.0) return;
-      for_each_node_offset(g, sd[p], x[p], [&](std::size_t i, double N, const VecQ& q) {
+      for_each_node_offset(g, sd[p], x[p], [&](std::size_t i, double N, const double* q) {
         if (N <= 0.0) return;
         double* blk = block(i);
         const double wN = w * N;
@@ -139,8 +139,11 @@ class NodeProjection {
   /// weight at a_I = 0, so no test per node is needed.
   double at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x) const {
     double value = 0.0;
-    for_each_node_offset(g, sd, x, [&](std::size_t i, double N, const VecQ& q) {
-      value += N * q.dot(Eigen::Map<const VecQ>(blocks_.data() + i * NB + NH));
+    for_each_node_offset(g, sd, x, [&](std::size_t i, double N, const double* q) {
+      const double* a = blocks_.data() + i * NB + NH;
+      double qa = a[0];  // q[0] = 1
+      for (int r = 1; r < NQ; ++r) qa += q[r] * a[r];
+      value += N * qa;
     });
     return value;
   }
@@ -148,7 +151,7 @@ class NodeProjection {
  private:
   double* block(std::size_t i) { return blocks_.data() + i * NB; }
 
-  /// fn(node, N_Ip, Q(d)) over a point's nodes in for_each_node's order (and with its N_Ip:
+  /// fn(node, N_Ip, Q(d) as NQ doubles) over a point's nodes in for_each_node's order (and with its N_Ip:
   /// wx[a] times the row's weight). Row by row (shape::for_each_row): the row's offsets along
   /// y (and z) are set once per row, x's once per node, with no index arithmetic per node.
   template <class Fn>
@@ -158,7 +161,9 @@ class NodeProjection {
     double off[Dim][S];
     for (int a = 0; a < Dim; ++a)
       for (int k = 0; k < S; ++k) off[a][k] = (x[a] - g.axis(a).node_x[sd.base[a] + k]) * inv_h;
-    VecQ q;
+    // A plain array, not an Eigen vector: rewriting one entry per node and then reading the vector
+    // as a packet stalled every node on store-to-load forwarding (update_pressure 13 % of B4).
+    double q[NQ];
     q[0] = 1.0;
     int b = 0, c = 0;  // the row's node along y (and z)
     shape::for_each_row(g, sd, [&](std::size_t row, double w_r, const auto&) {
