@@ -58,15 +58,29 @@ class NodeProjection {
     schedule.run([&](int p) {
       const double w = weight(p), f = value(p);
       if (w == 0.0) return;
-      for_each_node_offset(g, sd[p], x[p], [&](std::size_t i, double N, const double* q) {
+      for_each_node_offset(g, sd[p], x[p], [&](std::size_t i, double N, double d0, double d1, double d2) {
         if (N <= 0.0) return;
-        double* blk = block(i);
-        const double wN = w * N;
-        for (int r = 0, k = 0; r < NQ; ++r) {
-          const double s_r = wN * q[r];
-          for (int c = r; c < NQ; ++c) blk[k++] += s_r * q[c];
+        double* h = block(i);
+        const double wN = w * N, wf = wN * f;
+        // H += wN Q Q^T (packed upper triangle, row by row), rhs += wN f Q; Q = (1, d), written
+        // out in scalars (see for_each_node_offset).
+        if constexpr (Order == 0) {
+          h[0] += wN;
+          h[1] += wf;
+        } else if constexpr (Dim == 2) {
+          const double s1 = wN * d0, s2 = wN * d1;
+          h[0] += wN, h[1] += wN * d0, h[2] += wN * d1;
+          h[3] += s1 * d0, h[4] += s1 * d1;
+          h[5] += s2 * d1;
+          h[6] += wf, h[7] += wf * d0, h[8] += wf * d1;
+        } else {
+          const double s1 = wN * d0, s2 = wN * d1, s3 = wN * d2;
+          h[0] += wN, h[1] += wN * d0, h[2] += wN * d1, h[3] += wN * d2;
+          h[4] += s1 * d0, h[5] += s1 * d1, h[6] += s1 * d2;
+          h[7] += s2 * d1, h[8] += s2 * d2;
+          h[9] += s3 * d2;
+          h[10] += wf, h[11] += wf * d0, h[12] += wf * d1, h[13] += wf * d2;
         }
-        for (int r = 0; r < NQ; ++r) blk[NH + r] += wN * f * q[r];
       });
     });
     g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
@@ -139,10 +153,14 @@ class NodeProjection {
   /// weight at a_I = 0, so no test per node is needed.
   double at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x) const {
     double value = 0.0;
-    for_each_node_offset(g, sd, x, [&](std::size_t i, double N, const double* q) {
-      const double* a = blocks_.data() + i * NB + NH;
-      double qa = a[0];  // q[0] = 1
-      for (int r = 1; r < NQ; ++r) qa += q[r] * a[r];
+    for_each_node_offset(g, sd, x, [&](std::size_t i, double N, double d0, double d1, double d2) {
+      const double* a = blocks_.data() + i * NB + NH;  // Q . a_I, Q = (1, d)
+      double qa = a[0];
+      if constexpr (Order == 1) {
+        qa += d0 * a[1];
+        qa += d1 * a[2];
+        if constexpr (Dim == 3) qa += d2 * a[3];
+      }
       value += N * qa;
     });
     return value;
@@ -151,7 +169,7 @@ class NodeProjection {
  private:
   double* block(std::size_t i) { return blocks_.data() + i * NB; }
 
-  /// fn(node, N_Ip, Q(d) as NQ doubles) over a point's nodes in for_each_node's order (and with its N_Ip:
+  /// fn(node, N_Ip, d_x, d_y, d_z) (d_z = 0 in 2D) over a point's nodes in for_each_node's order (and with its N_Ip:
   /// wx[a] times the row's weight). Row by row (shape::for_each_row): the row's offsets along
   /// y (and z) are set once per row, x's once per node, with no index arithmetic per node.
   template <class Fn>
@@ -161,21 +179,15 @@ class NodeProjection {
     double off[Dim][S];
     for (int a = 0; a < Dim; ++a)
       for (int k = 0; k < S; ++k) off[a][k] = (x[a] - g.axis(a).node_x[sd.base[a] + k]) * inv_h;
-    // A plain array, not an Eigen vector: rewriting one entry per node and then reading the vector
-    // as a packet stalled every node on store-to-load forwarding (update_pressure 13 % of B4).
-    double q[NQ];
-    q[0] = 1.0;
+    // The offsets go to fn as scalars, and fn writes its sums out in scalars. With Q(d) in an
+    // Eigen vector or an array rewritten per node, GCC stored the offsets and reloaded them as one
+    // 16-byte packet: a store-to-load forwarding stall at every node (update_pressure 13 %, the
+    // fit 14 % of B4's step).
     int b = 0, c = 0;  // the row's node along y (and z)
     shape::for_each_row(g, sd, [&](std::size_t row, double w_r, const auto&) {
-      if constexpr (Order == 1) {
-        q[2] = off[1][b];
-        if constexpr (Dim == 3) q[3] = off[2][c];
-      }
+      const double dy = off[1][b], dz = Dim == 3 ? off[Dim - 1][c] : 0.0;
 #pragma GCC unroll 4
-      for (int a = 0; a < S; ++a) {
-        if constexpr (Order == 1) q[1] = off[0][a];
-        fn(row + a, sd.w[0][a] * w_r, q);
-      }
+      for (int a = 0; a < S; ++a) fn(row + a, sd.w[0][a] * w_r, off[0][a], dy, dz);
       if (++b == S) b = 0, ++c;
     });
   }
