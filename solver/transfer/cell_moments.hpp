@@ -24,6 +24,7 @@
 #include <omp.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>
@@ -71,8 +72,12 @@ class CellMoments {
                                   double cw, double cl) {
     const Axis& ax = g.axis(0);
     const Axis& ay = g.axis(1);
-    const double xi = (x[0] - ax.origin) / ax.h - base[0];
-    const double eta = (x[1] - ay.origin) / ay.h - base[1];
+    // Local coordinates in the cell. A point outside the grid (or not finite) has shape data
+    // clamped to the grid (transfer::evaluate_shapes reports it): clamp it the same way, so the
+    // operators stay what the clamped weights give and the run stops with "left the grid".
+    auto local = [](double u) { return std::isfinite(u) ? std::clamp(u, 0.0, 1.0) : 0.0; };
+    const double xi = local((x[0] - ax.origin) / ax.h - base[0]);
+    const double eta = local((x[1] - ay.origin) / ay.h - base[1]);
     double px[Q], py[Q];
     px[0] = 1.0;
     py[0] = 1.0;
@@ -109,10 +114,10 @@ class CellMoments {
           for (int b0 = b0_lo + s * S; b0 <= std::min(b0_hi, b0_lo + s * S + S - 1); ++b0) {
             const std::array<int, 2> base{b0, b1};
             double* M = moments_.data() + cell_index(base) * 3 * QQ;
-            if (M[kSoilSet * QQ] == 0.0 && M[kWaterSet * QQ] == 0.0 && M[kLaplaceSet * QQ] == 0.0) continue;
-            cell_operators(tables_[0][b0], tables_[1][b1], M, op);
-            std::fill_n(M, 3 * QQ, 0.0);
-            out(cell_index(base), op);
+            const bool empty = M[kSoilSet * QQ] == 0.0 && M[kWaterSet * QQ] == 0.0 && M[kLaplaceSet * QQ] == 0.0;
+            if (!empty) cell_operators(tables_[0][b0], tables_[1][b1], M, op);
+            std::fill_n(M, 3 * QQ, 0.0);  // every cell of the range: nothing carries into the next step
+            if (!empty) out(cell_index(base), op);
           }
       }
     }

@@ -85,7 +85,10 @@ class NodeProjection {
     });
     g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
       double* blk = block(i);
-      if (!(blk[0] > 0.0)) return;
+      if (!(blk[0] > 0.0)) {  // no weight (or not finite): a_I = 0, which at_point relies on
+        std::fill_n(blk + NH, NQ, 0.0);
+        return;
+      }
       Eigen::Map<VecQ> rhs(blk + NH);
       if constexpr (NQ > 1) {
         MatQ H;
@@ -149,7 +152,7 @@ class NodeProjection {
     }
   }
   /// The projected field at a point with shape data sd at x, a point of the last fit's box. Only
-  /// nodes with weight count: fit() zeroes every block of its box and leaves a node without
+  /// nodes with weight count: fit() leaves every node of its box without (finite, positive)
   /// weight at a_I = 0, so no test per node is needed.
   double at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x) const {
     double value = 0.0;

@@ -25,8 +25,12 @@ struct Dense {
   }
 };
 
+/// Points in cells [cx0, cx1] x [cy0, cy1] of a 7 x 5 grid. Single-point adds every weight from
+/// each point; double-point alternates soil points (D^s and L) and water points (D^w and L), as
+/// semi_implicit.cpp does. The box is the points' supports only (a partial box when the range is).
 template <class Shape>
-void check_against_pointwise(int points_per_cell) {
+void check_against_pointwise(int points_per_cell, int cx0 = 0, int cx1 = 6, int cy0 = 0, int cy1 = 4,
+                             bool double_point = false) {
   constexpr int S = Shape::support;
   // 7 x 5 cells of 0.4 m, off the origin: every B-spline cell class (clamped ends and interior).
   const Grid<2> g(Vec<2>(-1.1, 0.3), Vec<2>(-1.1 + 7 * 0.4, 0.3 + 5 * 0.4), 0.4, Shape::degree, Shape::bspline);
@@ -37,15 +41,22 @@ void check_against_pointwise(int points_per_cell) {
   Dense direct(nodes), moments(nodes);
   transfer::CellMoments<Shape> cm(g);
   NodeBox<2> box;
-  box.lo = {0, 0};
-  box.hi = {nn[0] - 1, nn[1] - 1};
-  for (int cy = 0; cy < 5; ++cy)
-    for (int cx = 0; cx < 7; ++cx)
+  box.lo = {nn[0], nn[1]};
+  box.hi = {-1, -1};
+  for (int cy = cy0; cy <= cy1; ++cy)
+    for (int cx = cx0; cx <= cx1; ++cx)
       for (int k = 0; k < points_per_cell; ++k) {
         const Vec<2> x(-1.1 + (cx + u01(rng)) * 0.4, 0.3 + (cy + u01(rng)) * 0.4);
-        const double cs = 0.5 + u01(rng), cw = 0.5 + u01(rng), cl = 0.5 + u01(rng);
+        double cs = 0.5 + u01(rng), cw = 0.5 + u01(rng);
+        const double cl = 0.5 + u01(rng);
+        const bool soil = k % 2 == 0;
+        if (double_point) (soil ? cw : cs) = 0.0;
         shape::ShapeData<2, S> sd;
         shape::evaluate<Shape>(g, x, Vec<2>(Vec<2>::Zero()), sd);
+        for (int a = 0; a < 2; ++a) {
+          box.lo[a] = std::min(box.lo[a], sd.base[a]);
+          box.hi[a] = std::max(box.hi[a], sd.base[a] + S - 1);
+        }
         std::array<std::size_t, S * S> node;
         std::array<double, S * S> N;
         std::array<Vec<2>, S * S> grad;
@@ -64,7 +75,9 @@ void check_against_pointwise(int points_per_cell) {
             direct.Dwx[e] += cw * N[r] * grad[c][0];
             direct.Dwy[e] += cw * N[r] * grad[c][1];
           }
-        cm.template add<true, true>(g, sd.base, x, cs, cw, cl);
+        if (!double_point) cm.template add<true, true>(g, sd.base, x, cs, cw, cl);
+        else if (soil) cm.template add<true, false>(g, sd.base, x, cs, 0.0, cl);
+        else cm.template add<false, true>(g, sd.base, x, 0.0, cw, cl);
       }
   int cells = 0;
   // reduce() calls back from several threads (cells of one colour in parallel): the dense
@@ -89,7 +102,7 @@ void check_against_pointwise(int points_per_cell) {
       }
     }
   });
-  EXPECT_EQ(cells, 35) << Shape::name;
+  EXPECT_EQ(cells, (cx1 - cx0 + 1) * (cy1 - cy0 + 1)) << Shape::name;
   const double scale = direct.max_abs();
   ASSERT_GT(scale, 0.0);
   double err = 0.0;
@@ -102,7 +115,9 @@ void check_against_pointwise(int points_per_cell) {
   }
   // Same integrals in exact arithmetic; the monomial basis on [0, 1) loses a few digits only.
   EXPECT_LT(err, 1e-12 * scale) << Shape::name << ": max |moments - pointwise| = " << err << " of " << scale;
-  // The moments are zeroed by reduce(): a second reduction finds no cell.
+  // The moments are zeroed by reduce(): a second reduction, over the whole grid, finds no cell.
+  box.lo = {0, 0};
+  box.hi = {nn[0] - 1, nn[1] - 1};
   cells = 0;
   cm.reduce(box, [&](std::size_t, const auto&) {
 #pragma omp atomic
@@ -119,4 +134,9 @@ TEST(CellMoments, QuadraticBSplineMatchesPointwiseSumsInClampedAndInteriorCells)
 }
 TEST(CellMoments, CubicBSplineMatchesPointwiseSumsInClampedAndInteriorCells) {
   check_against_pointwise<shape::BSpline3>(16);
+}
+TEST(CellMoments, DoublePointSetsInAPartialBoxMatchPointwiseSums) {
+  check_against_pointwise<shape::BSpline2>(8, 2, 5, 1, 3, true);
+  check_against_pointwise<shape::BSpline3>(8, 0, 3, 2, 4, true);
+  check_against_pointwise<shape::Linear>(4, 3, 6, 0, 1, true);
 }
