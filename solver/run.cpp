@@ -174,8 +174,8 @@ class Runner {
     // pressure-dependent elasticity starts at p_ref at zero elastic strain, so an unloaded body
     // expands and its stored energy goes negative while kinetic energy rises. The sum is then
     // conserved only up to the integration error of that exchange, so the largest release so far
-    // is allowed on top (undamped, B5's slope in its first steps: 0.029 J kinetic, -0.028 J stored, sum 2.6e-4 J,
-    // initial energy and work 0). A blow-up grows past any such bound.
+    // is allowed on top (B5's slope undamped, first steps: 0.029 J kinetic, -0.028 J stored, sum
+    // 2.6e-4 J, initial energy and work 0). A blow-up grows past any such bound.
     const double stored0 = formulation->strain_energy(state_);
     const double energy0 = formulation->kinetic_energy(state_) + stored0;
     double work_max = 0.0, released_max = 0.0;

@@ -641,20 +641,35 @@ class SemiImplicit final : public Formulation<Dim> {
       assemble_operators_from_moments(ps, ws);
     } else {
       schedule_.run([&](int p) {
-        const double V = ps.V[p], n = ps.n[p];
-        const double rho_s = ps.m[p] / ((1.0 - n) * V);
-        if (double_point_) {
-          scatter_operators<true, false>(sd_[p], (1.0 - n) * V, 0.0, V * (1.0 - n) / rho_s);
-        } else {
-          const double c = (1.0 - n) / rho_s + n / perm_[ps.material[p]].rho_w;
-          scatter_operators<true, true>(sd_[p], (1.0 - n) * V, n * V, V * c);
-        }
+        const Weights c = soil_weights(ps, p);
+        if (double_point_) scatter_operators<true, false>(sd_[p], c.s, 0.0, c.l);
+        else scatter_operators<true, true>(sd_[p], c.s, c.w, c.l);
       });
       if (double_point_)
         wschedule_.run([&](int p) {
-          scatter_operators<false, true>(sdw_[p], 0.0, ws.n[p] * ws.V[p], ws.V[p] * ws.n[p] / rho_w_points_[ws.material[p]]);
+          const Weights c = water_weights(ws, p);
+          scatter_operators<false, true>(sdw_[p], 0.0, c.w, c.l);
         });
     }
+  }
+
+  /// A point's weights in the operators of (5a): D^s gets s = (1 - n) V, D^w gets w = n V, L gets
+  /// l = c V with c = (1 - n)/rho_s + n/rho_w. Single-point: a soil point carries both phases;
+  /// double-point: a soil point only the soil's share of s and l (w unused), a water point only
+  /// the water's (water_weights).
+  struct Weights {
+    double s, w, l;
+  };
+  Weights soil_weights(const ParticleSet<Dim>& ps, int p) const {
+    const double V = ps.V[p], n = ps.n[p];
+    const double rho_s = ps.m[p] / ((1.0 - n) * V);
+    if (double_point_) return {(1.0 - n) * V, 0.0, V * (1.0 - n) / rho_s};
+    const double c = (1.0 - n) / rho_s + n / perm_[ps.material[p]].rho_w;
+    return {(1.0 - n) * V, n * V, V * c};
+  }
+  Weights water_weights(const ParticleSet<Dim>& ws, int p) const {
+    const double nV = ws.n[p] * ws.V[p];
+    return {0.0, nV, nV / rho_w_points_[ws.material[p]]};
   }
 
   /// (5a) by cell moments: the same weights as scatter_operators() below, summed per cell as
@@ -667,20 +682,17 @@ class SemiImplicit final : public Formulation<Dim> {
       Moments& cm = *moments_;
       if (double_point_) {
         schedule_.run([&](int p) {
-          const double V = ps.V[p], n = ps.n[p];
-          const double rho_s = ps.m[p] / ((1.0 - n) * V);
-          cm.template add<true, false>(grid_, sd_[p].base, ps.x[p], (1.0 - n) * V, 0.0, V * (1.0 - n) / rho_s);
+          const Weights c = soil_weights(ps, p);
+          cm.template add<true, false>(grid_, sd_[p].base, ps.x[p], c.s, 0.0, c.l);
         });
         wschedule_.run([&](int p) {
-          const double nV = ws.n[p] * ws.V[p];
-          cm.template add<false, true>(grid_, sdw_[p].base, ws.x[p], 0.0, nV, nV / rho_w_points_[ws.material[p]]);
+          const Weights c = water_weights(ws, p);
+          cm.template add<false, true>(grid_, sdw_[p].base, ws.x[p], 0.0, c.w, c.l);
         });
       } else {
         schedule_.run([&](int p) {
-          const double V = ps.V[p], n = ps.n[p];
-          const double rho_s = ps.m[p] / ((1.0 - n) * V);
-          const double c = (1.0 - n) / rho_s + n / perm_[ps.material[p]].rho_w;
-          cm.template add<true, true>(grid_, sd_[p].base, ps.x[p], (1.0 - n) * V, n * V, V * c);
+          const Weights c = soil_weights(ps, p);
+          cm.template add<true, true>(grid_, sd_[p].base, ps.x[p], c.s, c.w, c.l);
         });
       }
       const std::size_t nx = static_cast<std::size_t>(grid_.nodes_per_axis()[0]);

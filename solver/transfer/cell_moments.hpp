@@ -144,19 +144,18 @@ class CellMoments {
     cells.assign(ax.cells, AxisCell{PairPoly::Zero(), PairPoly::Zero(), PairPoly::Zero()});
     for (int c = 0; c < ax.cells; ++c) {
       Eigen::Matrix<double, S, S> V;
-      Eigen::Matrix<double, S, S> W;  // W(j, s): w_s at sample j
+      Eigen::Matrix<double, S, S> W, dW;  // (j, s): w_s and dw_s at sample j
       std::array<double, S> xs;
       for (int j = 0; j < S; ++j) {
         xs[j] = (j + 0.5) / S;
-        const double x = ax.origin + (c + xs[j]) * ax.h;
         int base = 0;
         double w[S], dw[S];
-        Shape::eval(ax, x, 0.0, base, w, dw);
+        Shape::eval(ax, ax.origin + (c + xs[j]) * ax.h, 0.0, base, w, dw);
         if (base != c)
           throw std::logic_error("cell moments: shape function's first node " + std::to_string(base) + " is not cell " +
                                  std::to_string(c));
         for (int m = 0; m < S; ++m) V(j, m) = std::pow(xs[j], m);
-        for (int s = 0; s < S; ++s) W(j, s) = w[s];
+        for (int s = 0; s < S; ++s) W(j, s) = w[s], dW(j, s) = dw[s];
       }
       const Eigen::Matrix<double, S, S> coef = V.fullPivLu().solve(W);  // coef(m, s): xi^m of w_s
       double wc[S][S] = {}, dc[S][S] = {};                           // [s][m]; dc in 1/m
@@ -166,17 +165,13 @@ class CellMoments {
           if (m + 1 < S) dc[s][m] = (m + 1) * coef(m + 1, s) / ax.h;
         }
       // The derivative of the interpolant must be the policy's derivative (same polynomial).
-      for (int j = 0; j < S; ++j) {
-        int base = 0;
-        double w[S], dw[S];
-        Shape::eval(ax, ax.origin + (c + xs[j]) * ax.h, 0.0, base, w, dw);
+      for (int j = 0; j < S; ++j)
         for (int s = 0; s < S; ++s) {
           double d = 0.0;
           for (int m = S - 2; m >= 0; --m) d = d * xs[j] + dc[s][m];
-          if (std::abs(d - dw[s]) > 1e-9 / ax.h)
+          if (std::abs(d - dW(j, s)) > 1e-9 / ax.h)
             throw std::logic_error("cell moments: shape function is not one polynomial per cell");
         }
-      }
       AxisCell& out = cells[c];
       for (int s = 0; s < S; ++s)
         for (int t = 0; t < S; ++t) {

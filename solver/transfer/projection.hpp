@@ -69,13 +69,13 @@ class NodeProjection {
           h[1] += wf;
         } else if constexpr (Dim == 2) {
           const double s1 = wN * d0, s2 = wN * d1;
-          h[0] += wN, h[1] += wN * d0, h[2] += wN * d1;
+          h[0] += wN, h[1] += s1, h[2] += s2;
           h[3] += s1 * d0, h[4] += s1 * d1;
           h[5] += s2 * d1;
           h[6] += wf, h[7] += wf * d0, h[8] += wf * d1;
         } else {
           const double s1 = wN * d0, s2 = wN * d1, s3 = wN * d2;
-          h[0] += wN, h[1] += wN * d0, h[2] += wN * d1, h[3] += wN * d2;
+          h[0] += wN, h[1] += s1, h[2] += s2, h[3] += s3;
           h[4] += s1 * d0, h[5] += s1 * d1, h[6] += s1 * d2;
           h[7] += s2 * d1, h[8] += s2 * d2;
           h[9] += s3 * d2;
@@ -172,8 +172,8 @@ class NodeProjection {
  private:
   double* block(std::size_t i) { return blocks_.data() + i * NB; }
 
-  /// fn(node, N_Ip, d_x, d_y, d_z) (d_z = 0 in 2D) over a point's nodes in for_each_node's order (and with its N_Ip:
-  /// wx[a] times the row's weight). Row by row (shape::for_each_row): the row's offsets along
+  /// fn(node, N_Ip, d_x, d_y, d_z) (d_z = 0 in 2D) over a point's nodes in for_each_node's order
+  /// (and with its N_Ip: wx[a] times the row's weight). Row by row (shape::for_each_row): the row's offsets along
   /// y (and z) are set once per row, x's once per node, with no index arithmetic per node.
   template <class Fn>
   static void for_each_node_offset(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x,
