@@ -195,6 +195,7 @@ class Runner {
       return true;
     };
 
+    const bool monitors_read_output_fields = monitors.reads_output_fields();
     double time_carry = 0.0;  // Kahan compensation of state_.time
     while (state_.time < end - eps_t) {
       if (g_interrupted) {
@@ -263,12 +264,15 @@ class Runner {
         status = "diverged";
         break;
       }
+      const bool monitor_due = state_.time >= next_monitor - eps_t || phase_ended;
+      if (checkpoint || frame_due || (monitor_due && monitors_read_output_fields))
+        formulation->complete_output_fields(state_);
       if (checkpoint) {
         last_good.copy_state_from(state_.solid);  // reuses capacity: no allocation after the first copy
         last_good_water.copy_state_from(state_.fluid);
         last_good_time = state_.time;
       }
-      if (state_.time >= next_monitor - eps_t || phase_ended) {
+      if (monitor_due) {
         monitors.record(state_, *formulation, work);
         next_monitor += scene_.output.monitor_interval;
         if (scene_.output.monitor_interval > 0)
@@ -312,9 +316,11 @@ class Runner {
       log_.line("the last frame (t = " + fmt(last_good_frame_time_) + " s) is the last good state; the run failed in step " +
                 std::to_string(state_.step + 1));
     } else if (status == "interrupted") {
+      formulation->complete_output_fields(state_);
       write_frame(state_.time);
       log_.failure("interrupted at t = " + fmt(state_.time) + " s; wrote the current state as the final frame");
     } else if (frames_.empty() || frames_.back().time < state_.time - eps_t) {
+      formulation->complete_output_fields(state_);
       write_frame(state_.time);
     }
 

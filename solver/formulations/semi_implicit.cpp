@@ -202,12 +202,46 @@ class SemiImplicit final : public Formulation<Dim> {
     for (std::size_t i = 0; i < nodes; ++i) support_[i] = support_integral(i);
     D_solid_.assign(nodes * KD, Vec<Dim>::Zero());
     D_water_.assign(nodes * KD, Vec<Dim>::Zero());
-    if constexpr (kCellMoments) moments_ = std::make_unique<Moments>(grid_);
+    if constexpr (kCellMoments) {
+      moments_ = std::make_unique<Moments>(grid_);
+      double rho_s = 0.0, rho_w = 0.0;
+      if (single_densities(state, rho_s, rho_w)) moments_->derive_laplace(rho_s, rho_w);
+    }
     d_steps_ = DSt::steps(grid_.nodes_per_axis());
   }
 
   std::string name() const override {
     return double_point_ ? "semi-implicit-double-point" : "semi-implicit-single-point";
+  }
+
+  /// Whether every soil point has the same grain density m / ((1 - n) V) (to 1e-12) and all the
+  /// water the same density: then the L weight of every point is (1 - n) V / rho_s + n V / rho_w
+  /// (soil_weights, water_weights), a fixed combination of the D^s and D^w weights
+  /// (CellMoments::derive_laplace). Both are constant in a run (incompressible constituents).
+  bool single_densities(const State<Dim>& st, double& rho_s, double& rho_w) const {
+    const ParticleSet<Dim>& ps = st.solid;
+    if (ps.size() == 0) return false;
+    auto same = [](double a, double b) { return std::abs(a - b) <= 1e-12 * std::abs(b); };
+    for (std::size_t p = 0; p < ps.size(); ++p) {
+      const double r = ps.m[p] / ((1.0 - ps.n[p]) * ps.V[p]);
+      if (!(r > 0.0) || !std::isfinite(r)) return false;
+      if (p == 0) rho_s = r;
+      else if (!same(r, rho_s)) return false;
+      const double w = double_point_ ? 0.0 : perm_[ps.material[p]].rho_w;
+      if (!double_point_) {
+        if (!(w > 0.0)) return false;
+        if (p == 0) rho_w = w;
+        else if (!same(w, rho_w)) return false;
+      }
+    }
+    if (double_point_) {
+      const ParticleSet<Dim>& ws = st.fluid;
+      if (ws.size() == 0) return false;
+      rho_w = rho_w_points_[ws.material[0]];
+      for (std::size_t p = 0; p < ws.size(); ++p)
+        if (!(rho_w_points_[ws.material[p]] > 0.0) || !same(rho_w_points_[ws.material[p]], rho_w)) return false;
+    }
+    return true;
   }
 
   void step(State<Dim>& st, const StepContext& ctx) override {
@@ -235,7 +269,9 @@ class SemiImplicit final : public Formulation<Dim> {
     box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
     if (double_point_) {
-      const NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, ws, sdw_, bad);
+      // With the cell moments the water points take no gradient (P2G, moments, G2P, projection:
+      // weights only); the point-wise D^w and L need them.
+      const NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape, Dim, !kCellMoments>(grid_, ws, sdw_, bad);
       if (bad >= 0) st.health.report(bad, "fluid", "water point left the grid (or position not finite)");
       for (int a = 0; a < Dim; ++a) {
         box_.lo[a] = std::min(box_.lo[a], wbox.lo[a]);
@@ -248,8 +284,8 @@ class SemiImplicit final : public Formulation<Dim> {
     clear_nodes();
     lap("shape functions");
 
-    scatter_soil(ps, b);                                                                    // (2)
-    if (double_point_) scatter_water_points(ws, b);
+    scatter_soil(ps);                                                                       // (2)
+    if (double_point_) scatter_water_points(ws);
     for (const auto& ff : face_forces_) {
       const double to_water = ff.split ? ps.n[ff.p] : 0.0;  // prescribed pore pressure: shared by porosity
       for_each_loaded_node(
@@ -264,7 +300,7 @@ class SemiImplicit final : public Formulation<Dim> {
     assemble_pressure(ps, ws);                                                              // (5a)-(5b)
     lap("pressure assembly");
 
-    predict(dt);                                                                            // (3)-(4)
+    predict(dt, b);                                                                         // (3)-(4)
     lap("predictor");
 
     if (!solve_pressure(dt)) {                                                              // (5c)
@@ -276,18 +312,18 @@ class SemiImplicit final : public Formulation<Dim> {
     lap("pressure solve");
 
     correct(ps, ws, dt);                                                                    // (6)
-    bad = update_pressure(ps, ws);
+    bad = update_pressure(ws);
     if (bad >= 0) st.health.report(bad, double_point_ ? "fluid" : "solid", "pore pressure not finite");
     lap("correction");
 
-    gather(ps, ws, dt);                                                                     // (7)
+    gather(ps, dt);                                                                         // (7)
     lap("g2p + musl remap");
 
     bad = update_soil(ps, dt);                                                              // (8)
     if (bad >= 0) st.health.report(bad, "solid", "volume ratio J <= 0 or porosity outside (0, 1)");
     fbar_.apply(grid_, box_, schedule_, sd_, dt, st, materials_, material_particles_);  // (9)(b)-(g), transfer/fbar.hpp
     if (double_point_) {
-      bad = update_water_points(ps, ws);
+      bad = update_water_points(ps, ws, dt);
       if (bad >= 0) st.health.report(bad, "fluid", "water-point porosity outside (0, 1]");
     }
     for (std::size_t k = 0; k < materials_.size(); ++k) {
@@ -359,7 +395,10 @@ class SemiImplicit final : public Formulation<Dim> {
     }
     loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool split) {
       const double n = split ? ps.n[p] : 0.0;
-      power += f_p.dot((1.0 - n) * ps.v[p] + n * ps.v_f[p]);
+      // Double-point: the water velocity at the point from the last step's nodes (ps.v_f is filled
+      // for output only, complete_output_fields).
+      const Vec<Dim> vf = split && output_fields_stale_ ? water_velocity_at(sd_[p]) : ps.v_f[p];
+      power += f_p.dot((1.0 - n) * ps.v[p] + n * vf);
     });
     return power;
   }
@@ -447,30 +486,36 @@ class SemiImplicit final : public Formulation<Dim> {
     });
   }
 
-  /// (2) Soil points: M_s, M_s v_s, sum S m n, sum S m k (eqs. 44-47) and the soil's force
-  ///   f_s = sum_sp [ S m_s b - V sigma' . grad S ],
+  /// (2) Soil points: M_s, M_s v_s, sum S m n, sum S m k (eqs. 44-47) and the soil's internal force
+  ///   f_s = -sum_sp V sigma' . grad S   (the body force sum S m_s b = M_s b is added at the node, (3)),
   /// and, single-point, the water carried on the same points (and its extent, free surface):
-  ///   M_w = sum S m_f, M_w v_w = sum S m_f v_f, f_w = sum S m_f b.
+  ///   M_w = sum S m_f, M_w v_w = sum S m_f v_f (body force M_w b at the node).
   /// The pressure forces (-n grad p on the water, -(1 - n) grad p on the soil: eqs. 55-57 with
   /// p_w = -p) are added at the nodes by the predictor, from the nodal p^t.
-  void scatter_soil(const ParticleSet<Dim>& ps, const Vec<Dim>& b) {
+  void scatter_soil(const ParticleSet<Dim>& ps) {
     const bool sp = !double_point_;
     const bool track_soil_volume = remove_escaped_;  // for remove_escaped_water
+    const bool laplace_derived = kCellMoments && moments_->laplace_derived();
     schedule_.run([&](int p) {
       const double V = ps.V[p], n = ps.n[p], m = ps.m[p];
       const double n0 = 1.0 - (1.0 - n) * V / ps.V0[p];
       const double k = perm_[ps.material[p]].at(n, n0);
       const Mat3 sig = to_matrix(ps.sigma[p]);
       const MatD<Dim> A = V * sig.template topLeftCorner<Dim, Dim>();
-      const Vec<Dim> mv = m * ps.v[p], mb = m * b;
+      const Vec<Dim> mv = m * ps.v[p];
       const double mf = sp ? ps.m_f[p] : 0.0;
-      const Vec<Dim> mfv = sp ? Vec<Dim>(mf * ps.v_f[p]) : Vec<Dim>::Zero(), mfb = mf * b;
+      const Vec<Dim> mfv = sp ? Vec<Dim>(mf * ps.v_f[p]) : Vec<Dim>::Zero();
       const Vec<Dim> x_lo = ps.x[p] - ps.l[p], x_hi = ps.x[p] + ps.l[p];
+      if constexpr (kCellMoments) {  // (5a)'s moments in the same pass (assemble_operators_from_moments)
+        const Weights c = soil_weights(ps, p, laplace_derived);
+        if (sp) moments_->template add<true, true>(grid_, sd_[p].base, ps.x[p], c.s, c.w, c.l);
+        else moments_->template add<true, false>(grid_, sd_[p].base, ps.x[p], c.s, 0.0, c.l);
+      }
       shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
         auto& s = soil_.acc[i];
         s.m += N * m;
         s.mv += N * mv;
-        s.f += N * mb - A * dN;
+        s.f -= A * dN;
         auto& e = node_[i];
         e.mn += N * m * n;
         e.mk += N * m * k;
@@ -479,7 +524,6 @@ class SemiImplicit final : public Formulation<Dim> {
           auto& w = water_.acc[i];
           w.m += N * mf;
           w.mv += N * mfv;
-          w.f += N * mfb;
           e.volume += N * V;
           if (N > 0.0 && mf > 0.0) {
             e.lo = e.lo.cwiseMin(x_lo);
@@ -491,18 +535,21 @@ class SemiImplicit final : public Formulation<Dim> {
   }
 
   /// (2) Water points (double-point, eqs. 50-51, 56): sum S rho_w V, sum S m v, sum S m (the
-  /// velocity weights of eq. 51) and the raw body force sum S rho_w V b, which the node pass
-  /// scales by the nodal porosity; the extent of the water in each support (free surface).
-  void scatter_water_points(const ParticleSet<Dim>& ws, const Vec<Dim>& b) {
+  /// velocity weights of eq. 51), from which the node pass forms M_w and the body force
+  /// n_I (sum S rho_w V) b; the extent of the water in each support (free surface).
+  void scatter_water_points(const ParticleSet<Dim>& ws) {
     wschedule_.run([&](int p) {
       const double V = ws.V[p], m = ws.m[p], rhoV = rho_w_points_[ws.material[p]] * V;
-      const Vec<Dim> mv = m * ws.v[p], rhoVb = rhoV * b;
+      const Vec<Dim> mv = m * ws.v[p];
       const Vec<Dim> x_lo = ws.x[p] - ws.l[p], x_hi = ws.x[p] + ws.l[p];
+      if constexpr (kCellMoments) {
+        const Weights c = water_weights(ws, p);
+        moments_->template add<false, true>(grid_, sdw_[p].base, ws.x[p], 0.0, c.w, c.l);
+      }
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
         auto& w = water_.acc[i];
         w.m += N * m;
         w.mv += N * mv;
-        w.f += N * rhoVb;
         auto& e = node_[i];
         e.w_raw += N * rhoV;
         e.volume += N * V;
@@ -529,7 +576,7 @@ class SemiImplicit final : public Formulation<Dim> {
   /// form -sum_p c V S_K grad p^t(x_p) of the nodal p^t (eqs. 55, 57 integrated by parts), i.e.
   /// the operator G of the corrections (6): see docs/formulations.md, "B-splines", for why the
   /// weak form sum_p c V p_p grad S_K of the paper is unstable with B-splines.
-  void predict(double dt) {
+  void predict(double dt, const Vec<Dim>& b) {
     const double alpha = damping_;
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto& ijk) {
       auto& s = soil_.acc[i];
@@ -541,12 +588,14 @@ class SemiImplicit final : public Formulation<Dim> {
       Vec<Dim> vw = Vec<Dim>::Zero();
       if (double_point_) {
         vw = w.m > transfer::empty_node_mass ? Vec<Dim>(w.mv / w.m) : Vec<Dim>::Zero();
-        // M_w = n_I sum S rho_w V (eq. 50); forces n_I (...) (eqs. 56-57); the soil takes (1 - n_I).
+        // M_w = n_I sum S rho_w V (eq. 50); its body force M_w b (eq. 56). w.f holds only the water's
+        // share of prescribed pore pressures, n_p f, already taken by porosity at the point.
         w.m = e.n * e.w_raw;
-        w.f = e.n * w.f;  // body force x n_I (eq. 56)
       } else if (w.m > transfer::empty_node_mass) {
         vw = w.mv / w.m;
       }
+      s.f += s.m * b;  // body forces sum S m b = M b of both phases (eqs. 55-56)
+      w.f += w.m * b;
       add_pressure_force(i, ijk, p_node_, s.f, w.f);  // -G p^t: eqs. 55, 57 in the strong form
       const bool has_w = w.m > transfer::empty_node_mass;
       const Vec<Dim> vs = has_s ? Vec<Dim>(s.mv / s.m) : Vec<Dim>::Zero();
@@ -638,7 +687,7 @@ class SemiImplicit final : public Formulation<Dim> {
     });
     // Soil points: D^s; single-point also D^w from the same points.
     if constexpr (kCellMoments) {
-      assemble_operators_from_moments(ps, ws);
+      assemble_operators_from_moments();
     } else {
       schedule_.run([&](int p) {
         const Weights c = soil_weights(ps, p);
@@ -660,8 +709,10 @@ class SemiImplicit final : public Formulation<Dim> {
   struct Weights {
     double s, w, l;
   };
-  Weights soil_weights(const ParticleSet<Dim>& ps, int p) const {
+  /// without_l: l is not needed (CellMoments::derive_laplace) and left 0.
+  Weights soil_weights(const ParticleSet<Dim>& ps, int p, bool without_l = false) const {
     const double V = ps.V[p], n = ps.n[p];
+    if (without_l) return {(1.0 - n) * V, double_point_ ? 0.0 : n * V, 0.0};
     const double rho_s = ps.m[p] / ((1.0 - n) * V);
     if (double_point_) return {(1.0 - n) * V, 0.0, V * (1.0 - n) / rho_s};
     const double c = (1.0 - n) / rho_s + n / perm_[ps.material[p]].rho_w;
@@ -677,24 +728,11 @@ class SemiImplicit final : public Formulation<Dim> {
   /// functions that are one polynomial per cell; transfer/cell_moments.hpp). B4 6^2: the
   /// point-wise scatter took 1443 instructions per point-step (single-point), 950 per pass
   /// (double-point).
-  void assemble_operators_from_moments(const ParticleSet<Dim>& ps, const ParticleSet<Dim>& ws) {
+  void assemble_operators_from_moments() {
     if constexpr (kCellMoments) {
+      // The points' moments were added by the P2G passes (scatter_soil, scatter_water_points),
+      // soil points first, in schedule order.
       Moments& cm = *moments_;
-      if (double_point_) {
-        schedule_.run([&](int p) {
-          const Weights c = soil_weights(ps, p);
-          cm.template add<true, false>(grid_, sd_[p].base, ps.x[p], c.s, 0.0, c.l);
-        });
-        wschedule_.run([&](int p) {
-          const Weights c = water_weights(ws, p);
-          cm.template add<false, true>(grid_, sdw_[p].base, ws.x[p], 0.0, c.w, c.l);
-        });
-      } else {
-        schedule_.run([&](int p) {
-          const Weights c = soil_weights(ps, p);
-          cm.template add<true, true>(grid_, sd_[p].base, ps.x[p], c.s, c.w, c.l);
-        });
-      }
       const std::size_t nx = static_cast<std::size_t>(grid_.nodes_per_axis()[0]);
       cm.reduce(box_, [&](std::size_t first, const typename Moments::CellOperators& op) {
         for (int r = 0; r < NP; ++r) {
@@ -904,8 +942,8 @@ class SemiImplicit final : public Formulation<Dim> {
   /// (6)-(7c) p^{t+1} at the water points: `none` p += sum S dp (incremental); `node-remap`
   /// p = sum S (pbar_I + dp_I) with pbar_I the water-mass-weighted nodal average (eq. 77);
   /// `mfvp-linear` the same with the linear projection (reproduces linear fields). Double-point:
-  /// the soil points take the interpolated p^{t+1} too (for output and monitors).
-  long update_pressure(ParticleSet<Dim>& ps, ParticleSet<Dim>& ws) {
+  /// the soil points' p^{t+1} (output only) is filled when read, complete_output_fields().
+  long update_pressure(ParticleSet<Dim>& ws) {
     const auto& sdw = double_point_ ? sdw_ : sd_;
     const auto& dp = poisson_.dp();
     if (remap_ == Remap::node) {
@@ -932,53 +970,67 @@ class SemiImplicit final : public Formulation<Dim> {
       ws.p[p] = new_pressure(sdw[p], ws.x[p], ws.p[p]);
       if (!std::isfinite(ws.p[p])) bad = std::min(bad, p);
     }
-    if (double_point_) {
-      const long m = static_cast<long>(ps.size());
-#pragma omp parallel for schedule(static) if (m > parallel_threshold)
-      for (long p = 0; p < m; ++p) {
-        double value = 0.0;
-        shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
-          value += N * (linear_.at_node(i) + dp[i]);
-        });
-        ps.p[p] = value;
-      }
-    }
+    output_fields_stale_ = double_point_;
     return bad == transfer::no_particle ? -1 : bad;
   }
 
-  /// (7) FLIP/PIC for both phases, soil positions with v_s^{t+1} (water points with v_w^{t+1}),
-  /// and the MUSL remap of the soil momentum (step 8a) before the strain increment.
-  void gather(ParticleSet<Dim>& ps, ParticleSet<Dim>& ws, double dt) {
-    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { soil_.acc[i].mv.setZero(); });
+  /// Double-point: the soil points' pore pressure, p^{t+1} interpolated from the nodes (the
+  /// projected p^t plus the increment, with the step's shape data), and the water velocity v_w^{t+1}
+  /// at them, for output and monitors only; the time loop asks for them when it writes
+  /// (Formulation::complete_output_fields).
+  void complete_output_fields(State<Dim>& st) override {
+    if (!output_fields_stale_) return;
+    output_fields_stale_ = false;
+    ParticleSet<Dim>& ps = st.solid;
+    const auto& dp = poisson_.dp();
+    const long m = static_cast<long>(ps.size());
+#pragma omp parallel for schedule(static) if (m > parallel_threshold)
+    for (long p = 0; p < m; ++p) {
+      double value = 0.0;
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        value += N * (linear_.at_node(i) + dp[i]);
+      });
+      ps.p[p] = value;
+      ps.v_f[p] = water_velocity_at(sd_[p]);
+    }
+  }
+  /// Double-point: v_w^{t+1} interpolated with a soil point's shape data (the water velocity at it).
+  Vec<Dim> water_velocity_at(const shape::ShapeData<Dim, S>& sd) const {
+    Vec<Dim> vw = Vec<Dim>::Zero();
+    shape::for_each_node(grid_, sd, [&](std::size_t i, double N, const Vec<Dim>&) { vw += N * water_.v[i]; });
+    return vw;
+  }
+
+  /// (7) the soil points (kPoreWater: single-point, the same points carry the pore water's
+  /// velocity too). Double-point soil points keep no water velocity in the step: the water
+  /// velocity at them is filled for output (complete_output_fields).
+  template <bool kPoreWater>
+  void gather_soil(ParticleSet<Dim>& ps, double dt) {
     schedule_.run([&](int p) {
       Vec<Dim> vs = Vec<Dim>::Zero(), vs_old = Vec<Dim>::Zero(), vw = Vec<Dim>::Zero(), vw_old = Vec<Dim>::Zero();
       shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
         vs += N * soil_.v[i];
         vs_old += N * soil_.vL[i];
-        vw += N * water_.v[i];
-        vw_old += N * water_.vL[i];
+        if constexpr (kPoreWater) {
+          vw += N * water_.v[i];
+          vw_old += N * water_.vL[i];
+        }
       });
       ps.v[p] = flip_ * (ps.v[p] + vs - vs_old) + (1.0 - flip_) * vs;
-      // Single-point: the pore water's velocity; double-point: the water velocity at the soil
-      // point, for output (the water points carry the water's own).
-      ps.v_f[p] = double_point_ ? vw : Vec<Dim>(flip_ * (ps.v_f[p] + vw - vw_old) + (1.0 - flip_) * vw);
+      if constexpr (kPoreWater) ps.v_f[p] = flip_ * (ps.v_f[p] + vw - vw_old) + (1.0 - flip_) * vw;
       ps.x[p] += dt * vs;
       const Vec<Dim> mv = ps.m[p] * ps.v[p];
       shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) { soil_.acc[i].mv += N * mv; });
     });
-    if (double_point_) {
-      const long n = static_cast<long>(ws.size());
-#pragma omp parallel for schedule(static) if (n > parallel_threshold)
-      for (long p = 0; p < n; ++p) {
-        Vec<Dim> vw = Vec<Dim>::Zero(), vw_old = Vec<Dim>::Zero();
-        shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
-          vw += N * water_.v[i];
-          vw_old += N * water_.vL[i];
-        });
-        ws.v[p] = flip_ * (ws.v[p] + vw - vw_old) + (1.0 - flip_) * vw;
-        ws.x[p] += dt * vw;
-      }
-    }
+  }
+
+  /// (7) FLIP/PIC for the soil points (single-point: and their pore water), soil positions with
+  /// v_s^{t+1}, and the MUSL remap of the soil momentum (step 8a) before the strain increment.
+  /// Double-point water points: update_water_points().
+  void gather(ParticleSet<Dim>& ps, double dt) {
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { soil_.acc[i].mv.setZero(); });
+    if (double_point_) gather_soil<false>(ps, dt);
+    else gather_soil<true>(ps, dt);
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       const auto& s = soil_.acc[i];
       soil_.v[i] = s.m > transfer::empty_node_mass ? Vec<Dim>(s.mv / s.m) : Vec<Dim>::Zero();
@@ -1061,10 +1113,11 @@ class SemiImplicit final : public Formulation<Dim> {
     }
   }
 
-  /// (8h)-(8i) double-point: nodal porosity from the updated soil points (soil-mass weighted,
-  /// divided by M_s: erratum of step 8h), interpolated at the water points (1 where no soil), and
-  /// their volume V = m / (n rho_w) (eq. 36: n V = n0 V0). Shape data of the start of the step.
-  long update_water_points(const ParticleSet<Dim>& ps, ParticleSet<Dim>& ws) {
+  /// (7) and (8h)-(8i) double-point water points, in one pass: FLIP/PIC velocity and position with
+  /// v_w^{t+1}; the nodal porosity from the updated soil points (soil-mass weighted, divided by
+  /// M_s: erratum of step 8h) interpolated at them (1 where no soil), and their volume
+  /// V = m / (n rho_w) (eq. 36: n V = n0 V0). Shape data of the start of the step.
+  long update_water_points(const ParticleSet<Dim>& ps, ParticleSet<Dim>& ws, double dt) {
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { node_[i].mn = 0.0; });
     schedule_.run([&](int p) {
       const double mn = ps.m[p] * ps.n[p];
@@ -1078,8 +1131,15 @@ class SemiImplicit final : public Formulation<Dim> {
     long bad = transfer::no_particle;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
+      Vec<Dim> vw = Vec<Dim>::Zero(), vw_old = Vec<Dim>::Zero();
       double np = 0.0;
-      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) { np += N * node_[i].n; });
+      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        vw += N * water_.v[i];
+        vw_old += N * water_.vL[i];
+        np += N * node_[i].n;
+      });
+      ws.v[p] = flip_ * (ws.v[p] + vw - vw_old) + (1.0 - flip_) * vw;
+      ws.x[p] += dt * vw;
       ws.n[p] = np;
       ws.V[p] = ws.m[p] / (np * rho_w_points_[ws.material[p]]);
       if (!(np > 0.0 && np <= 1.0 + 1e-12)) bad = std::min(bad, p);
@@ -1175,7 +1235,8 @@ class SemiImplicit final : public Formulation<Dim> {
   NodeProjection<Dim, S, 1> linear_;
   NodeProjection<Dim, S, 0> constant_;
   NodeBox<Dim> box_;
-  std::vector<shape::ShapeData<Dim, S>> sd_, sdw_;
+  std::vector<shape::ShapeData<Dim, S>> sd_, sdw_;  // sdw_: weights only with kCellMoments (dw not evaluated)
+  bool output_fields_stale_ = false;  // double-point: ps.p and ps.v_f lag the last step (complete_output_fields)
   std::vector<FaceForce<Dim, S>> face_forces_;
   StripeSchedule schedule_, wschedule_;
   Reorder<Dim> reorder_, wreorder_;

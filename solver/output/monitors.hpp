@@ -19,6 +19,13 @@ class Monitors {
   Monitors(const scene::Scene& s, const State<Dim>& st, const std::string& path, const std::string& header_comment);
   /// Appends one row at the state's time.
   void record(const State<Dim>& st, const Formulation<Dim>& f, double external_work);
+  /// Whether a column reads a field a formulation may fill only for output (pore pressure, water
+  /// velocity at the soil points: Formulation::complete_output_fields).
+  bool reads_output_fields() const {
+    for (const auto& c : columns_)
+      if (c.q == Q::pore || c.q == Q::vel_fluid) return true;
+    return false;
+  }
   /// One line per point monitor: which particle it follows and where it started.
   std::vector<std::string> describe(const State<Dim>& st) const;
 

@@ -118,10 +118,37 @@ struct BSpline {
   /// polynomials, tests/unit/test_shape.cpp):
   ///   P = 2: w = ((1 - xi)^2 / 2, 1/2 + xi - xi^2, xi^2 / 2)
   ///   P = 3: w = ((1 - xi)^3, 3 xi^3 - 6 xi^2 + 4, -3 xi^3 + 3 xi^2 + 3 xi + 1, xi^3) / 6
+  ///   P = 2 in the end cells of the clamped knots (0, 0, 0, 1, 2, ...): only the first function
+  ///   differs from the uniform span, and only in cell 0 (cell 1 is uniform):
+  ///     cell 0:      w = ((1 - xi)^2, 2 xi - 3/2 xi^2, xi^2 / 2)
+  ///     cell n - 1:  the mirror image, eta = 1 - xi: w = (eta^2 / 2, 2 eta - 3/2 eta^2, (1 - eta)^2)
   [[gnu::always_inline]] static void eval(const Axis& ax, double x, double l_p, int& base, double* w, double* dw) {
     const double u = (x - ax.origin) / ax.h;  // in cells
     const int c = cell_of(u, ax.cells);
-    if (c < P || c > ax.cells - P - 1) return eval_clamped(ax, x, l_p, base, w, dw);
+    constexpr int kFirstUniform = P == 2 ? 1 : P;  // cells of the closed forms: kFirstUniform .. n - 1 - kFirstUniform
+    if (c < kFirstUniform || c > ax.cells - kFirstUniform - 1) {
+      if (P != 2 || ax.cells < 3) return eval_clamped(ax, x, l_p, base, w, dw);
+      base = c;
+      const double inv_h = 1.0 / ax.h;
+      if (c == 0) {
+        const double xi = u, r = 1.0 - xi;
+        w[0] = r * r;
+        w[1] = xi * (2.0 - 1.5 * xi);
+        w[2] = 0.5 * xi * xi;
+        dw[0] = -2.0 * r * inv_h;
+        dw[1] = (2.0 - 3.0 * xi) * inv_h;
+        dw[2] = xi * inv_h;
+      } else {
+        const double eta = 1.0 - (u - c), r = 1.0 - eta;
+        w[0] = 0.5 * eta * eta;
+        w[1] = eta * (2.0 - 1.5 * eta);
+        w[2] = r * r;
+        dw[0] = -eta * inv_h;
+        dw[1] = -(2.0 - 3.0 * eta) * inv_h;
+        dw[2] = 2.0 * r * inv_h;
+      }
+      return;
+    }
     base = c;
     const double xi = u - c, inv_h = 1.0 / ax.h;
     if constexpr (P == 2) {
@@ -145,7 +172,8 @@ struct BSpline {
       dw[3] = 0.5 * xi2 * inv_h;
     }
   }
-  /// Any cell, by the recursion (the only path in the P cells next to each clamped end).
+  /// Any cell, by the recursion (the path of the cubic's P cells next to each clamped end, and of
+  /// axes of fewer than 3 cells).
   static void eval_clamped(const Axis& ax, double x, double /*l_p*/, int& base, double* w, double* dw) {
     const double u = (x - ax.origin) / ax.h;  // in cells
     const int n = ax.cells;
@@ -254,11 +282,19 @@ inline void for_each_row(const Grid<Dim>& g, const ShapeData<Dim, S>& sd, Fn&& f
   }
 }
 
-/// Evaluates the shape data of a particle at x with half-sizes l_p.
-template <class Shape, int Dim>
+/// Evaluates the shape data of a particle at x with half-sizes l_p. kGradients = false: the
+/// weights only (sd.dw is left as it was), for points that never take a gradient.
+template <class Shape, int Dim, bool kGradients = true>
 inline void evaluate(const Grid<Dim>& g, const Vec<Dim>& x, const Vec<Dim>& l_p,
                      ShapeData<Dim, Shape::support>& sd) {
-  for (int a = 0; a < Dim; ++a) Shape::eval(g.axis(a), x[a], l_p[a], sd.base[a], sd.w[a], sd.dw[a]);
+  for (int a = 0; a < Dim; ++a) {
+    if constexpr (kGradients) {
+      Shape::eval(g.axis(a), x[a], l_p[a], sd.base[a], sd.w[a], sd.dw[a]);
+    } else {
+      double unused[Shape::support];  // dead stores once eval is inlined
+      Shape::eval(g.axis(a), x[a], l_p[a], sd.base[a], sd.w[a], unused);
+    }
+  }
 }
 
 }  // namespace swmpm::shape

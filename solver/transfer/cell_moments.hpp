@@ -65,8 +65,21 @@ class CellMoments {
     moments_.assign(static_cast<std::size_t>(nn_[0]) * nn_[1] * 3 * QQ, 0.0);
   }
 
+  /// When every point's L weight is cl = cs / rho_s + cw / rho_w with the same densities (one
+  /// grain density, one water density: c = (1 - n)/rho_s + n/rho_w of seed 001 eq. 61), the L
+  /// moments are that combination of the D^s and D^w moments. After this call add() takes no cl
+  /// and reduce() forms the L moments per cell: one weight less per point (25 products for
+  /// quadratic B-splines). The sums then differ from the point-wise ones by rounding only.
+  void derive_laplace(double rho_s, double rho_w) {
+    laplace_from_sets_ = true;
+    inv_rho_s_ = 1.0 / rho_s;
+    inv_rho_w_ = 1.0 / rho_w;
+  }
+  bool laplace_derived() const { return laplace_from_sets_; }
+
   /// Adds one point at x in the cell whose first node is `base` (ShapeData::base): the weights of
-  /// D^s (cs, m^3 in 2D per metre), D^w (cw) and L (cl). Sets whose flag is off are skipped.
+  /// D^s (cs, m^3 in 2D per metre), D^w (cw) and L (cl, ignored after derive_laplace()). Sets
+  /// whose flag is off are skipped.
   template <bool kSoil, bool kWater>
   [[gnu::always_inline]] void add(const Grid<2>& g, const std::array<int, 2>& base, const Vec<2>& x, double cs,
                                   double cw, double cl) {
@@ -93,7 +106,8 @@ class CellMoments {
       for (int i = 0; i < QQ; ++i) M[kSoilSet * QQ + i] += cs * v[i];
     if constexpr (kWater)
       for (int i = 0; i < QQ; ++i) M[kWaterSet * QQ + i] += cw * v[i];
-    for (int i = 0; i < QQ; ++i) M[kLaplaceSet * QQ + i] += cl * v[i];
+    if (!laplace_from_sets_)
+      for (int i = 0; i < QQ; ++i) M[kLaplaceSet * QQ + i] += cl * v[i];
   }
 
   /// Turns the moments of every cell with points into its node pairs, calls
@@ -115,6 +129,9 @@ class CellMoments {
             const std::array<int, 2> base{b0, b1};
             double* M = moments_.data() + cell_index(base) * 3 * QQ;
             const bool empty = M[kSoilSet * QQ] == 0.0 && M[kWaterSet * QQ] == 0.0 && M[kLaplaceSet * QQ] == 0.0;
+            if (!empty && laplace_from_sets_)
+              for (int i = 0; i < QQ; ++i)
+                M[kLaplaceSet * QQ + i] = inv_rho_s_ * M[kSoilSet * QQ + i] + inv_rho_w_ * M[kWaterSet * QQ + i];
             if (!empty) cell_operators(tables_[0][b0], tables_[1][b1], M, op);
             std::fill_n(M, 3 * QQ, 0.0);  // every cell of the range: nothing carries into the next step
             if (!empty) out(cell_index(base), op);
@@ -125,6 +142,8 @@ class CellMoments {
 
  private:
   static constexpr int kSoilSet = 0, kWaterSet = 1, kLaplaceSet = 2;
+  bool laplace_from_sets_ = false;
+  double inv_rho_s_ = 0.0, inv_rho_w_ = 0.0;  // m^3/kg, derive_laplace()
 
   /// One axis and one cell: coefficients in xi of the products of the cell's S 1D functions,
   /// pair (s, t) = s * S + t: w_s w_t, w_s dw_t, dw_s dw_t (dw in 1/m).

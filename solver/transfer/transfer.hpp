@@ -21,7 +21,8 @@ constexpr long no_particle = std::numeric_limits<long>::max();
 /// Evaluates every particle's shape data and returns the active node box (the nodes any particle
 /// touches). Particles outside [grid.min, grid.max] or with non-finite positions are reported
 /// through `bad` (smallest index) and get clamped shape data so the step can finish.
-template <class Shape, int Dim>
+/// kGradients = false: weights only (shape::evaluate), for points that never take a gradient.
+template <class Shape, int Dim, bool kGradients = true>
 NodeBox<Dim> evaluate_shapes(const Grid<Dim>& g, const ParticleSet<Dim>& ps,
                              std::vector<shape::ShapeData<Dim, Shape::support>>& sd, long& bad) {
   constexpr int S = Shape::support;
@@ -44,7 +45,7 @@ NodeBox<Dim> evaluate_shapes(const Grid<Dim>& g, const ParticleSet<Dim>& ps,
         tbad = std::min(tbad, p);
         for (int a = 0; a < Dim; ++a) x[a] = std::isfinite(x[a]) ? std::clamp(x[a], gmin[a], gmax[a]) : gmin[a];
       }
-      shape::evaluate<Shape>(g, x, ps.l[p], sd[p]);
+      shape::evaluate<Shape, Dim, kGradients>(g, x, ps.l[p], sd[p]);
       for (int a = 0; a < Dim; ++a) {
         tlo[a] = std::min(tlo[a], sd[p].base[a]);
         thi[a] = std::max(thi[a], sd[p].base[a] + S - 1);
