@@ -87,7 +87,8 @@ class Formulation {
   /// Cells holding at least one particle, at the last step.
   virtual std::size_t active_cells(const State<Dim>& s) const = 0;
   /// Fills the fields a formulation keeps only for output (semi-implicit double-point: the pore
-  /// pressure interpolated at the soil points), from the last step's nodal solution. The time loop
+  /// pressure and the water velocity interpolated at the soil points), from the last completed
+  /// step's nodal solution. The time loop
   /// calls it before monitors, frames and in-memory snapshots read the particles; the step itself
   /// does not need these fields, so they are not computed every step.
   virtual void complete_output_fields(State<Dim>& /*s*/) {}

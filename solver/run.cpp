@@ -219,7 +219,7 @@ class Runner {
       formulation->step(state_, ctx);
       if (!state_.health.ok()) {
         status = "diverged";
-        diagnosis = describe_failure(last_good, ctx);
+        diagnosis = describe_failure(last_good, last_good_water, ctx);
         break;
       }
       {  // trapezoidal rule on the power of external forces
@@ -409,19 +409,38 @@ class Runner {
   /// The loads' clock: loads act during the initialisation phase (t < 0) as they do at t = 0.
   static double load_clock(double t) { return std::max(t, 0.0); }
 
-  std::string describe_failure(const ParticleSet<Dim>& before, const StepContext& ctx) const {
+  /// The failed particle, before (the last good snapshot) and now. A "fluid" report names a water
+  /// point of the double-point set (State::fluid) when there is one; otherwise the index is a
+  /// soil point's (single-point formulations carry the pore water on the soil points).
+  std::string describe_failure(const ParticleSet<Dim>& before_solid, const ParticleSet<Dim>& before_fluid,
+                               const StepContext& ctx) const {
     const auto& h = state_.health;
     const long p = h.particle;
+    const bool water_point = h.phase == "fluid" && p < static_cast<long>(state_.fluid.size());
+    const ParticleSet<Dim>& now = water_point ? state_.fluid : state_.solid;
+    const ParticleSet<Dim>& before = water_point ? before_fluid : before_solid;
+    std::ostringstream os;
+    if (p < 0 || p >= static_cast<long>(now.size())) {
+      os << h.phase << " " << h.what << " in the step from t = " << state_.time << " s (step " << state_.step + 1
+         << ", dt = " << ctx.dt << " s). Try a smaller dt (or cfl), or check the loads.";
+      return os.str();
+    }
     // The snapshot may hold the particles in another order: find this one by id.
     long q = 0;
-    while (q < static_cast<long>(before.size()) && before.id[q] != state_.solid.id[p]) ++q;
-    std::ostringstream os;
-    os << h.phase << " particle " << state_.solid.id[p] << " (body \"" << scene_.bodies[state_.solid.body[p]].name
-       << "\") " << h.what << " in the step from t = " << state_.time << " s (step " << state_.step + 1 << ", dt = " << ctx.dt
-       << " s); it was at (";
-    for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << before.x[q][a];
-    os << ") with speed " << before.v[q].norm() << " m/s at the last good state; now at (";
-    for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << state_.solid.x[p][a];
+    while (q < static_cast<long>(before.size()) && before.id[q] != now.id[p]) ++q;
+    const int body = now.body[p];
+    os << h.phase << " particle " << now.id[p];
+    if (body >= 0 && body < static_cast<int>(scene_.bodies.size())) os << " (body \"" << scene_.bodies[body].name << "\")";
+    os << " " << h.what << " in the step from t = " << state_.time << " s (step " << state_.step + 1 << ", dt = " << ctx.dt
+       << " s); ";
+    if (q < static_cast<long>(before.size())) {
+      os << "it was at (";
+      for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << before.x[q][a];
+      os << ") with speed " << before.v[q].norm() << " m/s at the last good state; now at (";
+    } else {
+      os << "now at (";
+    }
+    for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << now.x[p][a];
     os << "). Try a smaller dt (or cfl), a finer output interval to see the onset, or check the loads.";
     return os.str();
   }

@@ -663,9 +663,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       div_s_[p] = ps.L[p].trace();  // eq. 9 takes the (smoothed) rate of (6): F-bar acts on the skeleton only
-      Mat3 dF = Mat3::Identity();
-      dF.template topLeftCorner<Dim, Dim>() = transfer::deformation_increment<Dim>(ps.L[p], dt);
-      ps.F[p] = dF * ps.F[p];
+      transfer::apply_increment<Dim>(transfer::deformation_increment<Dim>(ps.L[p], dt), ps.F[p]);  // F_{n+1} = dF F_n
       const double V_old = ps.V[p];
       const double J = ps.F[p].determinant();
       ps.V[p] = J * ps.V0[p];

@@ -15,19 +15,22 @@
 //   (0) reorder points into scatter order every 10 steps (memory locality only)
 //   (1) shape data of soil (and water) points, active node box, scatter schedules
 //   (2) P2G: M_s, M_s v_s, nodal porosity and conductivity (soil-mass weighted, eqs. 44-47),
-//       water mass and momentum (eqs. 50-51), effective-stress and body forces
+//       water mass and momentum (eqs. 50-51), effective-stress forces; the points' moments of
+//       (5a) in the same pass (cell-moment path)
 //   (5a)-(5b) L, D_s, D_w (eqs. 61-63, L symmetric: c(n) inside the quadrature), the nodal p^t
 //       (linear projection of the points' pressures), free-surface and drained nodes
-//   (3)-(4) water and soil predictors (eqs. 52-53) with the drag implicit in both velocities (the
+//   (3)-(4) body forces M b at the nodes; water and soil predictors (eqs. 52-53) with the drag implicit in both velocities (the
 //       seed's form, implicit in v_w* only, with solver.drag_integration = semi-implicit) and the
 //       pressure force -G p^t of the same gradient operator G as the corrections; BCs
 //   (5c) pressure increment: L dp = -(1/dt) [D_s v_s* + D_w v_w*] (eq. 60), p^{t+1} = p_D on
 //       free-surface / drained nodes; CHOLMOD
 //   (6) corrections v^{t+1} = v* - dt/M (G dp) (eqs. 64-68, G the strong gradient S_K grad S_J);
 //       BCs on v^{t+1}; pressure update (incremental, or node-wise remap eq. 77)
-//   (7) G2P (FLIP/PIC), positions; MUSL remap of the soil velocity (step 8a)
-//   (8) F, V, porosity (1 - n) J = 1 - n0, permeability law; water-point porosity and volume
-//       (step 8h with the M_s erratum, eq. 36); stress by the material model
+//   (7) G2P (FLIP/PIC) of the soil points, positions; MUSL remap of the soil velocity (step 8a)
+//   (8) F, V, porosity (1 - n) J = 1 - n0, permeability law; double-point water points: G2P,
+//       positions, porosity and volume in one pass (step 8h with the M_s erratum, eq. 36); stress
+//       by the material model. (Stage timers: the water points' G2P is in "stress and porosity",
+//       the moments in "p2g", since 2026-12-02.)
 #include <omp.h>
 
 #include <algorithm>
@@ -245,6 +248,9 @@ class SemiImplicit final : public Formulation<Dim> {
   }
 
   void step(State<Dim>& st, const StepContext& ctx) override {
+    // The nodal data of the last step are overwritten below: output fields not filled by now stay
+    // as they are (a failed step leaves them; a completed one marks them stale again).
+    output_fields_stale_ = false;
     ParticleSet<Dim>& ps = st.solid;
     ParticleSet<Dim>& ws = double_point_ ? st.fluid : st.solid;
     const double dt = ctx.dt;
@@ -1050,20 +1056,8 @@ class SemiImplicit final : public Formulation<Dim> {
         L.noalias() += soil_.v[i] * dN.transpose();
       });
       ps.L[p] = L;
-      // F_{n+1} = dF F_n with dF = [d 0; 0 1] (plane strain: only the first Dim rows change),
-      // written entry by entry: a 3x3 temporary copied back in 16-byte packets stalled on
-      // store-to-load forwarding (perf: a fifth of this loop).
-      const MatD<Dim> d = transfer::deformation_increment<Dim>(L, dt);
       Mat3& F = ps.F[p];
-      for (int c = 0; c < 3; ++c) {
-        double row[Dim];
-        for (int a = 0; a < Dim; ++a) {
-          double sum = 0.0;
-          for (int b = 0; b < Dim; ++b) sum += d(a, b) * F(b, c);
-          row[a] = sum;
-        }
-        for (int a = 0; a < Dim; ++a) F(a, c) = row[a];
-      }
+      transfer::apply_increment<Dim>(transfer::deformation_increment<Dim>(L, dt), F);  // F_{n+1} = dF F_n
       const double V_old = ps.V[p];
       const double J = F.determinant();
       ps.V[p] = J * ps.V0[p];

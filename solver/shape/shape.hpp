@@ -118,8 +118,8 @@ struct BSpline {
   /// polynomials, tests/unit/test_shape.cpp):
   ///   P = 2: w = ((1 - xi)^2 / 2, 1/2 + xi - xi^2, xi^2 / 2)
   ///   P = 3: w = ((1 - xi)^3, 3 xi^3 - 6 xi^2 + 4, -3 xi^3 + 3 xi^2 + 3 xi + 1, xi^3) / 6
-  ///   P = 2 in the end cells of the clamped knots (0, 0, 0, 1, 2, ...): only the first function
-  ///   differs from the uniform span, and only in cell 0 (cell 1 is uniform):
+  ///   P = 2 with the clamped knots (0, 0, 0, 1, 2, ...): only the end cells 0 and n - 1 differ
+  ///   from the uniform span (cell 1 is uniform):
   ///     cell 0:      w = ((1 - xi)^2, 2 xi - 3/2 xi^2, xi^2 / 2)
   ///     cell n - 1:  the mirror image, eta = 1 - xi: w = (eta^2 / 2, 2 eta - 3/2 eta^2, (1 - eta)^2)
   [[gnu::always_inline]] static void eval(const Axis& ax, double x, double l_p, int& base, double* w, double* dw) {
@@ -127,27 +127,31 @@ struct BSpline {
     const int c = cell_of(u, ax.cells);
     constexpr int kFirstUniform = P == 2 ? 1 : P;  // cells of the closed forms: kFirstUniform .. n - 1 - kFirstUniform
     if (c < kFirstUniform || c > ax.cells - kFirstUniform - 1) {
-      if (P != 2 || ax.cells < 3) return eval_clamped(ax, x, l_p, base, w, dw);
-      base = c;
-      const double inv_h = 1.0 / ax.h;
-      if (c == 0) {
-        const double xi = u, r = 1.0 - xi;
-        w[0] = r * r;
-        w[1] = xi * (2.0 - 1.5 * xi);
-        w[2] = 0.5 * xi * xi;
-        dw[0] = -2.0 * r * inv_h;
-        dw[1] = (2.0 - 3.0 * xi) * inv_h;
-        dw[2] = xi * inv_h;
+      if constexpr (P != 2) {
+        return eval_clamped(ax, x, l_p, base, w, dw);
       } else {
-        const double eta = 1.0 - (u - c), r = 1.0 - eta;
-        w[0] = 0.5 * eta * eta;
-        w[1] = eta * (2.0 - 1.5 * eta);
-        w[2] = r * r;
-        dw[0] = -eta * inv_h;
-        dw[1] = -(2.0 - 3.0 * eta) * inv_h;
-        dw[2] = 2.0 * r * inv_h;
+        if (ax.cells < 3) return eval_clamped(ax, x, l_p, base, w, dw);
+        base = c;
+        const double inv_h = 1.0 / ax.h;
+        if (c == 0) {
+          const double xi = u, r = 1.0 - xi;
+          w[0] = r * r;
+          w[1] = xi * (2.0 - 1.5 * xi);
+          w[2] = 0.5 * xi * xi;
+          dw[0] = -2.0 * r * inv_h;
+          dw[1] = (2.0 - 3.0 * xi) * inv_h;
+          dw[2] = xi * inv_h;
+        } else {
+          const double eta = 1.0 - (u - c), r = 1.0 - eta;
+          w[0] = 0.5 * eta * eta;
+          w[1] = eta * (2.0 - 1.5 * eta);
+          w[2] = r * r;
+          dw[0] = -eta * inv_h;
+          dw[1] = -(2.0 - 3.0 * eta) * inv_h;
+          dw[2] = 2.0 * r * inv_h;
+        }
+        return;
       }
-      return;
     }
     base = c;
     const double xi = u - c, inv_h = 1.0 / ax.h;

@@ -174,6 +174,23 @@ inline MatD<Dim> deformation_increment(const MatD<Dim>& L, double dt) {
   return (MatD<Dim>::Identity() - half).inverse() * (MatD<Dim>::Identity() + half);
 }
 
+/// F <- [d 0; 0 1] F in place (plane strain and 3D: the first Dim rows change), entry by entry:
+/// the Eigen product into a 3x3 temporary, copied back in 16-byte packets, stalled on
+/// store-to-load forwarding (perf, semi-implicit update_soil: a fifth of the loop). Same sums, same
+/// order as the product (a zero term adds nothing), so the result is bitwise the same.
+template <int Dim>
+inline void apply_increment(const MatD<Dim>& d, Mat3& F) {
+  for (int c = 0; c < 3; ++c) {
+    double row[Dim];
+    for (int a = 0; a < Dim; ++a) {
+      double sum = 0.0;
+      for (int b = 0; b < Dim; ++b) sum += d(a, b) * F(b, c);
+      row[a] = sum;
+    }
+    for (int a = 0; a < Dim; ++a) F(a, c) = row[a];
+  }
+}
+
 /// det of deformation_increment(L, dt) without forming it: det(I + dt L/2) / det(I - dt L/2).
 template <int Dim>
 inline double deformation_jacobian(const MatD<Dim>& L, double dt) {

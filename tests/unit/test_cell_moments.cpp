@@ -30,7 +30,7 @@ struct Dense {
 /// semi_implicit.cpp does. The box is the points' supports only (a partial box when the range is).
 template <class Shape>
 void check_against_pointwise(int points_per_cell, int cx0 = 0, int cx1 = 6, int cy0 = 0, int cy1 = 4,
-                             bool double_point = false) {
+                             bool double_point = false, bool derived_laplace = false) {
   constexpr int S = Shape::support;
   // 7 x 5 cells of 0.4 m, off the origin: every B-spline cell class (clamped ends and interior).
   const Grid<2> g(Vec<2>(-1.1, 0.3), Vec<2>(-1.1 + 7 * 0.4, 0.3 + 5 * 0.4), 0.4, Shape::degree, Shape::bspline);
@@ -40,6 +40,10 @@ void check_against_pointwise(int points_per_cell, int cx0 = 0, int cx1 = 6, int 
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   Dense direct(nodes), moments(nodes);
   transfer::CellMoments<Shape> cm(g);
+  // derive_laplace: every point's L weight is cs / rho_s + cw / rho_w (one grain, one water
+  // density), and the moments form L from the D^s and D^w sets.
+  const double rho_s = 2650.0, rho_w = 1000.0;
+  if (derived_laplace) cm.derive_laplace(rho_s, rho_w);
   NodeBox<2> box;
   box.lo = {nn[0], nn[1]};
   box.hi = {-1, -1};
@@ -48,9 +52,10 @@ void check_against_pointwise(int points_per_cell, int cx0 = 0, int cx1 = 6, int 
       for (int k = 0; k < points_per_cell; ++k) {
         const Vec<2> x(-1.1 + (cx + u01(rng)) * 0.4, 0.3 + (cy + u01(rng)) * 0.4);
         double cs = 0.5 + u01(rng), cw = 0.5 + u01(rng);
-        const double cl = 0.5 + u01(rng);
+        double cl = 0.5 + u01(rng);
         const bool soil = k % 2 == 0;
         if (double_point) (soil ? cw : cs) = 0.0;
+        if (derived_laplace) cl = cs / rho_s + cw / rho_w;
         shape::ShapeData<2, S> sd;
         shape::evaluate<Shape>(g, x, Vec<2>(Vec<2>::Zero()), sd);
         for (int a = 0; a < 2; ++a) {
@@ -139,4 +144,9 @@ TEST(CellMoments, DoublePointSetsInAPartialBoxMatchPointwiseSums) {
   check_against_pointwise<shape::BSpline2>(8, 2, 5, 1, 3, true);
   check_against_pointwise<shape::BSpline3>(8, 0, 3, 2, 4, true);
   check_against_pointwise<shape::Linear>(4, 3, 6, 0, 1, true);
+}
+TEST(CellMoments, LaplaceDerivedFromTheDensitiesMatchesPointwiseSums) {
+  check_against_pointwise<shape::BSpline2>(9, 0, 6, 0, 4, false, true);
+  check_against_pointwise<shape::BSpline2>(8, 2, 5, 1, 3, true, true);
+  check_against_pointwise<shape::Linear>(9, 0, 6, 0, 4, true, true);
 }

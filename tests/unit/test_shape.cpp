@@ -192,6 +192,36 @@ TEST(ShapeFunctions, BSplineClosedFormsMatchTheRecursion) {
   compare(shape::BSpline3{}, 3);
 }
 
+/// Short axes: with 3 and 4 cells both clamped ends are one cell apart (cell 1 borders both), and
+/// below 3 cells eval takes the recursion. Every cell of every such axis agrees with it.
+TEST(ShapeFunctions, QuadraticBSplineOnShortAxesMatchesTheRecursion) {
+  for (int cells = 1; cells <= 4; ++cells) {
+    Axis ax;
+    ax.origin = 0.5;
+    ax.h = 0.2;
+    ax.cells = cells;
+    ax.nodes = cells + 2;
+    int tested = 0;
+    for (double u = 0.0; u < cells; u += 0.0113) {
+      const double x = ax.origin + u * ax.h;
+      int b1, b2;
+      double w1[3], dw1[3], w2[3], dw2[3];
+      shape::BSpline2::eval(ax, x, 0.0, b1, w1, dw1);
+      shape::BSpline2::eval_clamped(ax, x, 0.0, b2, w2, dw2);
+      ASSERT_EQ(b1, b2) << cells << " cells, u = " << u;
+      double sum = 0.0;
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(w1[i], w2[i], 1e-14) << cells << " cells, u = " << u;
+        EXPECT_NEAR(dw1[i], dw2[i], 1e-12) << cells << " cells, u = " << u;
+        sum += w1[i];
+      }
+      EXPECT_NEAR(sum, 1.0, 1e-14);  // partition of unity
+      ++tested;
+    }
+    EXPECT_GT(tested, 80 * cells);
+  }
+}
+
 /// A face force goes to the face point's nodes that carry mass, scaled so that the shares still
 /// sum to the force (solver/loads.hpp, for_each_loaded_node): the case of linear shape functions
 /// with a particle on a node row, whose next row up has no mass but a weight of 1/2 at the face point.
