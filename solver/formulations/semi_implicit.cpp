@@ -223,28 +223,19 @@ class SemiImplicit final : public Formulation<Dim> {
   /// (CellMoments::derive_laplace). Both are constant in a run (incompressible constituents).
   bool single_densities(const State<Dim>& st, double& rho_s, double& rho_w) const {
     const ParticleSet<Dim>& ps = st.solid;
-    if (ps.size() == 0) return false;
-    auto same = [](double a, double b) { return std::abs(a - b) <= 1e-12 * std::abs(b); };
-    for (std::size_t p = 0; p < ps.size(); ++p) {
-      const double r = ps.m[p] / ((1.0 - ps.n[p]) * ps.V[p]);
-      if (!(r > 0.0) || !std::isfinite(r)) return false;
-      if (p == 0) rho_s = r;
-      else if (!same(r, rho_s)) return false;
-      const double w = double_point_ ? 0.0 : perm_[ps.material[p]].rho_w;
-      if (!double_point_) {
-        if (!(w > 0.0)) return false;
-        if (p == 0) rho_w = w;
-        else if (!same(w, rho_w)) return false;
+    const ParticleSet<Dim>& ws = double_point_ ? st.fluid : st.solid;
+    if (ps.size() == 0 || ws.size() == 0) return false;
+    // Every value positive, finite and within 1e-12 of the first.
+    auto one_value = [](std::size_t n, auto&& value_of, double& first) {
+      first = value_of(0);
+      for (std::size_t p = 0; p < n; ++p) {
+        const double v = value_of(p);
+        if (!(v > 0.0) || !std::isfinite(v) || std::abs(v - first) > 1e-12 * first) return false;
       }
-    }
-    if (double_point_) {
-      const ParticleSet<Dim>& ws = st.fluid;
-      if (ws.size() == 0) return false;
-      rho_w = rho_w_points_[ws.material[0]];
-      for (std::size_t p = 0; p < ws.size(); ++p)
-        if (!(rho_w_points_[ws.material[p]] > 0.0) || !same(rho_w_points_[ws.material[p]], rho_w)) return false;
-    }
-    return true;
+      return true;
+    };
+    return one_value(ps.size(), [&](std::size_t p) { return grain_density(ps, static_cast<int>(p)); }, rho_s) &&
+           one_value(ws.size(), [&](std::size_t p) { return water_density(ws, static_cast<int>(p)); }, rho_w);
   }
 
   void step(State<Dim>& st, const StepContext& ctx) override {
@@ -544,12 +535,13 @@ class SemiImplicit final : public Formulation<Dim> {
   /// velocity weights of eq. 51), from which the node pass forms M_w and the body force
   /// n_I (sum S rho_w V) b; the extent of the water in each support (free surface).
   void scatter_water_points(const ParticleSet<Dim>& ws) {
+    const bool laplace_derived = kCellMoments && moments_->laplace_derived();
     wschedule_.run([&](int p) {
       const double V = ws.V[p], m = ws.m[p], rhoV = rho_w_points_[ws.material[p]] * V;
       const Vec<Dim> mv = m * ws.v[p];
       const Vec<Dim> x_lo = ws.x[p] - ws.l[p], x_hi = ws.x[p] + ws.l[p];
       if constexpr (kCellMoments) {
-        const Weights c = water_weights(ws, p);
+        const Weights c = water_weights(ws, p, laplace_derived);
         moments_->template add<false, true>(grid_, sdw_[p].base, ws.x[p], 0.0, c.w, c.l);
       }
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
@@ -719,14 +711,21 @@ class SemiImplicit final : public Formulation<Dim> {
   Weights soil_weights(const ParticleSet<Dim>& ps, int p, bool without_l = false) const {
     const double V = ps.V[p], n = ps.n[p];
     if (without_l) return {(1.0 - n) * V, double_point_ ? 0.0 : n * V, 0.0};
-    const double rho_s = ps.m[p] / ((1.0 - n) * V);
+    const double rho_s = grain_density(ps, p);
     if (double_point_) return {(1.0 - n) * V, 0.0, V * (1.0 - n) / rho_s};
-    const double c = (1.0 - n) / rho_s + n / perm_[ps.material[p]].rho_w;
+    const double c = (1.0 - n) / rho_s + n / water_density(ps, p);
     return {(1.0 - n) * V, n * V, V * c};
   }
-  Weights water_weights(const ParticleSet<Dim>& ws, int p) const {
+  Weights water_weights(const ParticleSet<Dim>& ws, int p, bool without_l = false) const {
     const double nV = ws.n[p] * ws.V[p];
-    return {0.0, nV, nV / rho_w_points_[ws.material[p]]};
+    return {0.0, nV, without_l ? 0.0 : nV / water_density(ws, p)};
+  }
+  /// rho_s = m / ((1 - n) V) of a soil point (kg/m^3).
+  static double grain_density(const ParticleSet<Dim>& ps, int p) { return ps.m[p] / ((1.0 - ps.n[p]) * ps.V[p]); }
+  /// rho_w of a point's water: a water point's material (double-point), a soil point's pore fluid
+  /// (single-point).
+  double water_density(const ParticleSet<Dim>& ws, int p) const {
+    return double_point_ ? rho_w_points_[ws.material[p]] : perm_[ws.material[p]].rho_w;
   }
 
   /// (5a) by cell moments: the same weights as scatter_operators() below, summed per cell as
