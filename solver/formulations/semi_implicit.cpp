@@ -77,12 +77,8 @@ struct Permeability {
   }
 };
 
-/// Linear/GIMP: a volume fraction of a node's support below this counts as not full: the node is
-/// on the free surface of the water and gets p = 0 (Kularathna & Soga 2017, seed-notes seed 001
-/// item 7). A node on a flat surface through the nodes has 0.5.
-constexpr double kFullSupport = 0.6;
-/// B-splines: a node whose support reaches more than this many cells beyond the water is on the
-/// free surface (see free_surface()).
+/// A node whose support reaches more than this many cells beyond the water is on the free surface
+/// (every shape function; see free_surface()).
 constexpr double kSurfaceCut = 0.25;
 
 template <int Dim, class Shape>
@@ -198,6 +194,7 @@ class SemiImplicit final : public Formulation<Dim> {
     soil_.resize(nodes);
     water_.resize(nodes);
     node_.assign(nodes, NodeExtra{});
+    extent_.assign(nodes, Extent{});
     support_.resize(nodes);
     p_node_.assign(nodes, 0.0);
     A_soil_.assign(nodes, Vec<Dim>::Zero());
@@ -268,7 +265,7 @@ class SemiImplicit final : public Formulation<Dim> {
     if (double_point_) {
       // With the cell moments the water points take no gradient (P2G, moments, G2P, projection:
       // weights only); the point-wise D^w and L need them.
-      const NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape, Dim, !kCellMoments>(grid_, ws, sdw_, bad);
+      const NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, ws, sdw_, bad);
       if (bad >= 0) st.health.report(bad, "fluid", "water point left the grid (or position not finite)");
       for (int a = 0; a < Dim; ++a) {
         box_.lo[a] = std::min(box_.lo[a], wbox.lo[a]);
@@ -433,11 +430,6 @@ class SemiImplicit final : public Formulation<Dim> {
   struct NodeExtra {
     double mn = 0.0;        // sum S m_s n (nodal porosity x M_s, eq. 46)
     double mk = 0.0;        // sum S m_s k (eq. 47)
-    double volume = 0.0;    // sum S V of the water points (fraction of the support filled)
-    // Extent of the water inside the node's support: min / max over its water points (S > 0) of
-    // x -/+ l per axis (the points' domains), for the free-surface nodes of B-splines.
-    Vec<Dim> lo = Vec<Dim>::Constant(std::numeric_limits<double>::infinity());
-    Vec<Dim> hi = Vec<Dim>::Constant(-std::numeric_limits<double>::infinity());
     double w_raw = 0.0;     // double-point: sum S rho_w V (M_w = n_I w_raw, eq. 50)
     double n = 1.0, k = 0.0;            // nodal porosity and conductivity
     double soil_volume = 0.0;           // sum S V of the soil points (only with escaped_water = remove)
@@ -480,7 +472,63 @@ class SemiImplicit final : public Formulation<Dim> {
       soil_.acc[i] = {Vec<Dim>::Zero(), Vec<Dim>::Zero(), 0.0};
       water_.acc[i] = {Vec<Dim>::Zero(), Vec<Dim>::Zero(), 0.0};
       node_[i] = NodeExtra{};
+      extent_[i] = Extent{};
     });
+  }
+
+  /// Extent of the water: min / max of x -/+ l per axis (the points' domains) over water points,
+  /// for the free surface (surface_cut). kBaseExtent: every node of a point's support has S > 0
+  /// (off the cell faces), so the points are collected per first node of their support (base)
+  /// and a node's extent is the union over the bases whose supports hold it (water_extent): one
+  /// update per point instead of one per node. Otherwise (GIMP: a far node's S may vanish) per
+  /// node over its points with S > 0.
+  static constexpr bool kBaseExtent = Shape::bspline || std::is_same_v<Shape, shape::Linear>;
+  struct Extent {
+    Vec<Dim> lo = Vec<Dim>::Constant(std::numeric_limits<double>::infinity());
+    Vec<Dim> hi = Vec<Dim>::Constant(-std::numeric_limits<double>::infinity());
+    void add(const Vec<Dim>& x_lo, const Vec<Dim>& x_hi) {
+      lo = lo.cwiseMin(x_lo);
+      hi = hi.cwiseMax(x_hi);
+    }
+  };
+  /// Adds a water point's domain [x - l, x + l] (through the scatter schedule).
+  template <bool G>
+  void add_extent(const shape::ShapeData<Dim, S, G>& sd, const Vec<Dim>& x, const Vec<Dim>& l) {
+    const Vec<Dim> x_lo = x - l, x_hi = x + l;
+    if constexpr (kBaseExtent) {
+      extent_[grid_.index(sd.base)].add(x_lo, x_hi);
+    } else {
+      shape::for_each_node(grid_, sd, [&](std::size_t i, double N, const auto&) {
+        if (N > 0.0) extent_[i].add(x_lo, x_hi);
+      });
+    }
+  }
+  /// The extent of the water inside node i's support.
+  Extent water_extent(std::size_t i, const std::array<int, Dim>& ijk) const {
+    if constexpr (!kBaseExtent) {
+      return extent_[i];
+    } else {
+      // Bases b with b <= ijk <= b + S - 1 per axis, inside this step's box (cleared entries).
+      std::array<int, Dim> lo, n;
+      for (int a = 0; a < Dim; ++a) {
+        lo[a] = std::max(ijk[a] - (S - 1), box_.lo[a]);
+        n[a] = ijk[a] - lo[a] + 1;
+      }
+      Extent e;
+      std::array<int, Dim> b = lo;
+      for (;;) {
+        const Extent& c = extent_[grid_.index(b)];
+        e.lo = e.lo.cwiseMin(c.lo);
+        e.hi = e.hi.cwiseMax(c.hi);
+        int a = 0;
+        for (; a < Dim; ++a) {
+          if (++b[a] < lo[a] + n[a]) break;
+          b[a] = lo[a];
+        }
+        if (a == Dim) break;
+      }
+      return e;
+    }
   }
 
   /// (2) Soil points: M_s, M_s v_s, sum S m n, sum S m k (eqs. 44-47) and the soil's internal force
@@ -502,7 +550,7 @@ class SemiImplicit final : public Formulation<Dim> {
       const Vec<Dim> mv = m * ps.v[p];
       const double mf = sp ? ps.m_f[p] : 0.0;
       const Vec<Dim> mfv = sp ? Vec<Dim>(mf * ps.v_f[p]) : Vec<Dim>::Zero();
-      const Vec<Dim> x_lo = ps.x[p] - ps.l[p], x_hi = ps.x[p] + ps.l[p];
+      if (sp && mf > 0.0) add_extent(sd_[p], ps.x[p], ps.l[p]);
       if constexpr (kCellMoments) {  // (5a)'s moments in the same pass (assemble_operators_from_moments)
         const Weights c = soil_weights(ps, p, laplace_derived);
         if (sp) moments_->template add<true, true>(grid_, sd_[p].base, ps.x[p], c.s, c.w, c.l);
@@ -521,11 +569,6 @@ class SemiImplicit final : public Formulation<Dim> {
           auto& w = water_.acc[i];
           w.m += N * mf;
           w.mv += N * mfv;
-          e.volume += N * V;
-          if (N > 0.0 && mf > 0.0) {
-            e.lo = e.lo.cwiseMin(x_lo);
-            e.hi = e.hi.cwiseMax(x_hi);
-          }
         }
       });
     });
@@ -539,22 +582,17 @@ class SemiImplicit final : public Formulation<Dim> {
     wschedule_.run([&](int p) {
       const double V = ws.V[p], m = ws.m[p], rhoV = rho_w_points_[ws.material[p]] * V;
       const Vec<Dim> mv = m * ws.v[p];
-      const Vec<Dim> x_lo = ws.x[p] - ws.l[p], x_hi = ws.x[p] + ws.l[p];
+      add_extent(sdw_[p], ws.x[p], ws.l[p]);
       if constexpr (kCellMoments) {
         const Weights c = water_weights(ws, p, laplace_derived);
         moments_->template add<false, true>(grid_, sdw_[p].base, ws.x[p], 0.0, c.w, c.l);
       }
-      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const auto&) {
         auto& w = water_.acc[i];
         w.m += N * m;
         w.mv += N * mv;
         auto& e = node_[i];
         e.w_raw += N * rhoV;
-        e.volume += N * V;
-        if (N > 0.0) {
-          e.lo = e.lo.cwiseMin(x_lo);
-          e.hi = e.hi.cwiseMax(x_hi);
-        }
       });
     });
   }
@@ -648,9 +686,11 @@ class SemiImplicit final : public Formulation<Dim> {
   /// free surface (free_surface()); dp_D = p_D - p^t(x_D), with p^t at the node from the linear
   /// projection of the points' pressures (exact for a hydrostatic field).
   void assemble_pressure(const ParticleSet<Dim>& ps, const ParticleSet<Dim>& ws) {
-    const auto& sdw = double_point_ ? sdw_ : sd_;
-    const auto& wsched = double_point_ ? wschedule_ : schedule_;
-    linear_.fit(grid_, box_, wsched, sdw, ws.x, [&](int p) { return ws.V[p]; }, [&](int p) { return ws.p[p]; });
+    auto fit = [&](const auto& sdw, const StripeSchedule& wsched) {
+      linear_.fit(grid_, box_, wsched, sdw, ws.x, [&](int p) { return ws.V[p]; }, [&](int p) { return ws.p[p]; });
+    };
+    if (double_point_) fit(sdw_, wschedule_);
+    else fit(sd_, schedule_);
     // A node whose water lies in a strip of its support (free surface) has an ill-posed linear fit
     // (leverage > NodeProjection::kMaxLeverage): it takes the gradient of the nearest well-posed node inward
     // along its cut and fits only its value (docs/formulations.md, "Free-surface nodes whose fit
@@ -790,14 +830,16 @@ class SemiImplicit final : public Formulation<Dim> {
     return poisson_.solve(grid_, box_);
   }
 
-  /// (5b) Whether node i (with water) is on the free surface, and its prescribed pressure p_D.
-  /// Linear/GIMP: its support is less than kFullSupport full; p_D = 0 (the node lies on the
-  /// surface). B-splines: the water inside its support stops more than kSurfaceCut cells short of
-  /// the support's end along some axis (a grid face is not a cut: the support is clipped to the
-  /// grid). Such a node lies up to about a cell inside or outside the surface, so p_D = 0 there
-  /// would move the surface; p_D is instead the value at the node of the linear fit of the points'
-  /// pressures shifted to vanish on the surface x_s (the water's extent along the axis of the
-  /// largest cut): p_D = -dp/dx_a (x_s - x_Ia). Exact for a hydrostatic or any linear field.
+  /// (5b) Whether node i (with water) is on the free surface, and its prescribed pressure p_D:
+  /// the water inside its support stops more than kSurfaceCut cells short of the support's end
+  /// along some axis (a grid face is not a cut: the support is clipped to the grid; Kularathna &
+  /// Soga 2017, seed-notes seed 001 item 7, took a support less than 60 % full, which misses the
+  /// surface between nodes of the B-splines: docs/formulations.md). With B-splines such a node lies
+  /// up to about a cell inside or outside the surface, so p_D = 0 there would move the surface;
+  /// p_D is instead the value at the node of the linear fit of the points' pressures shifted to
+  /// vanish on the surface x_s (the water's extent along the axis of the largest cut):
+  /// p_D = -dp/dx_a (x_s - x_Ia). Exact for a hydrostatic or any linear field (and p_D = 0 for
+  /// linear/GIMP with a surface through a node row).
   bool free_surface(std::size_t i, const std::array<int, Dim>& ijk, double& p_D) const {
     p_D = 0.0;
     double x_s = 0.0;
@@ -830,10 +872,10 @@ class SemiImplicit final : public Formulation<Dim> {
     }
     return i;
   }
-  /// The largest cut of node i's support by the water's extent (e.lo / e.hi): its length [m],
+  /// The largest cut of node i's support by the water's extent (water_extent): its length [m],
   /// axis, side (hi_cut: the water stops short of the support's upper end) and the extent x_s.
   double surface_cut(std::size_t i, const std::array<int, Dim>& ijk, int& axis, bool& hi_cut, double& x_s) const {
-    const NodeExtra& e = node_[i];
+    const Extent e = water_extent(i, ijk);
     double cut = 0.0;
     axis = -1;
     for (int a = 0; a < Dim; ++a) {
@@ -845,7 +887,7 @@ class SemiImplicit final : public Formulation<Dim> {
   }
   /// Support of basis j along axis a, clipped to the grid [m]: B-splines [t_j, t_{j+q+1}] on the
   /// clamped knot vector; linear and GIMP the hat's [x_j - h, x_j + h] (GIMP's wider reach of
-  /// l_p belongs to the points' domains, which e.lo / e.hi already include).
+  /// l_p belongs to the points' domains, which the water extent already includes).
   std::pair<double, double> support_range(int a, int j) const {
     const auto& ax = grid_.axis(a);
     if constexpr (Shape::bspline) {
@@ -949,18 +991,16 @@ class SemiImplicit final : public Formulation<Dim> {
   /// `mfvp-linear` the same with the linear projection (reproduces linear fields). Double-point:
   /// the soil points' p^{t+1} (output only) is filled when read, complete_output_fields().
   long update_pressure(ParticleSet<Dim>& ws) {
-    const auto& sdw = double_point_ ? sdw_ : sd_;
     const auto& dp = poisson_.dp();
     if (remap_ == Remap::node) {
-      const auto& wsched = double_point_ ? wschedule_ : schedule_;
       if (double_point_)
-        constant_.fit(grid_, box_, wsched, sdw, ws.x, [&](int p) { return ws.m[p]; }, [&](int p) { return ws.p[p]; });
+        constant_.fit(grid_, box_, wschedule_, sdw_, ws.x, [&](int p) { return ws.m[p]; }, [&](int p) { return ws.p[p]; });
       else
-        constant_.fit(grid_, box_, wsched, sdw, ws.x, [&](int p) { return ws.m_f[p]; }, [&](int p) { return ws.p[p]; });
+        constant_.fit(grid_, box_, schedule_, sd_, ws.x, [&](int p) { return ws.m_f[p]; }, [&](int p) { return ws.p[p]; });
     }
-    auto new_pressure = [&](const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x, double p_old) {
+    auto new_pressure = [&](const auto& sd, const Vec<Dim>& x, double p_old) {
       double inc = 0.0;
-      shape::for_each_node(grid_, sd, [&](std::size_t i, double N, const Vec<Dim>&) { inc += N * dp[i]; });
+      shape::for_each_node(grid_, sd, [&](std::size_t i, double N, const auto&) { inc += N * dp[i]; });
       switch (remap_) {
         case Remap::none: return p_old + inc;
         case Remap::node: return constant_.at_point(grid_, sd, x) + inc;
@@ -968,13 +1008,17 @@ class SemiImplicit final : public Formulation<Dim> {
       }
       return p_old + inc;
     };
-    const long n = static_cast<long>(ws.size());
-    long bad = transfer::no_particle;
+    auto update = [&](const auto& sdw) {
+      const long n = static_cast<long>(ws.size());
+      long bad = transfer::no_particle;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
-    for (long p = 0; p < n; ++p) {
-      ws.p[p] = new_pressure(sdw[p], ws.x[p], ws.p[p]);
-      if (!std::isfinite(ws.p[p])) bad = std::min(bad, p);
-    }
+      for (long p = 0; p < n; ++p) {
+        ws.p[p] = new_pressure(sdw[p], ws.x[p], ws.p[p]);
+        if (!std::isfinite(ws.p[p])) bad = std::min(bad, p);
+      }
+      return bad;
+    };
+    const long bad = double_point_ ? update(sdw_) : update(sd_);
     output_fields_stale_ = double_point_;
     return bad == transfer::no_particle ? -1 : bad;
   }
@@ -1137,7 +1181,7 @@ class SemiImplicit final : public Formulation<Dim> {
     for (long p = 0; p < n; ++p) {
       Vec<Dim> vw = Vec<Dim>::Zero(), vw_old = Vec<Dim>::Zero();
       double np = 0.0;
-      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const auto&) {
         vw += N * water_.v[i];
         vw_old += N * water_.vL[i];
         np += N * node_[i].n;
@@ -1165,7 +1209,7 @@ class SemiImplicit final : public Formulation<Dim> {
 #pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       double phi = 0.0;
-      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const auto&) {
         phi += N * std::min(1.0, node_[i].soil_volume / support_[i]);
       });
       escaped_[p] = phi < 0.5;
@@ -1229,6 +1273,7 @@ class SemiImplicit final : public Formulation<Dim> {
   std::array<double, 6> face_pressure_{};   // Pa, prescribed p on drained faces (0 unless `pressure`)
   NodeFields<Dim> soil_, water_;
   std::vector<NodeExtra> node_;
+  std::vector<Extent> extent_;   // per node: water extent (kBaseExtent: of the points whose support starts there)
   std::vector<double> support_;  // per node: integral of its basis function over the grid
   std::vector<double> p_node_;   // Pa, per node: p^t from the linear projection of the points' pressures
   std::vector<Vec<Dim>> A_soil_, A_water_;  // per node: M v^t + dt f of each phase (implicit drag)
@@ -1239,7 +1284,8 @@ class SemiImplicit final : public Formulation<Dim> {
   NodeProjection<Dim, S, 1> linear_;
   NodeProjection<Dim, S, 0> constant_;
   NodeBox<Dim> box_;
-  std::vector<shape::ShapeData<Dim, S>> sd_, sdw_;  // sdw_: weights only with kCellMoments (dw not evaluated)
+  std::vector<shape::ShapeData<Dim, S>> sd_;
+  std::vector<shape::ShapeData<Dim, S, !kCellMoments>> sdw_;  // weights only with the cell moments
   bool output_fields_stale_ = false;  // double-point: ps.p and ps.v_f lag the last step (complete_output_fields)
   std::vector<FaceForce<Dim, S>> face_forces_;
   StripeSchedule schedule_, wschedule_;

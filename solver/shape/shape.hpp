@@ -224,25 +224,44 @@ using BSpline2 = BSpline<2>;
 using BSpline3 = BSpline<3>;
 
 /// Per-particle shape data, computed once per step and reused by every transfer of that step.
-template <int Dim, int S>
+/// kGradients = false: the weights only (points that never take a gradient, e.g. the water points
+/// of the semi-implicit double-point with cell moments): 56 instead of 104 bytes per point in 2D,
+/// which every pass over those points streams.
+template <int Dim, int S, bool kGradients = true>
 struct ShapeData {
+  static constexpr bool gradients = true;
   std::array<int, Dim> base;
   double w[Dim][S];
   double dw[Dim][S];
 };
+template <int Dim, int S>
+struct ShapeData<Dim, S, false> {
+  static constexpr bool gradients = false;
+  std::array<int, Dim> base;
+  double w[Dim][S];
+};
+
+/// What the visitors below pass for the gradient of weights-only shape data: a callback that
+/// uses it (as a Vec) does not compile.
+struct NoGradient {};
 
 /// Visits the S^Dim nodes of a particle: fn(flat node index, N_ip, grad N_ip).
 /// Node order is fixed (x fastest), so every sum over nodes has one summation order.
-template <int Dim, int S, class Fn>
-inline void for_each_node(const Grid<Dim>& g, const ShapeData<Dim, S>& sd, Fn&& fn) {
+/// Weights-only shape data pass NoGradient for grad N_ip.
+template <int Dim, int S, bool G, class Fn>
+inline void for_each_node(const Grid<Dim>& g, const ShapeData<Dim, S, G>& sd, Fn&& fn) {
   const auto& nn = g.nodes_per_axis();
   if constexpr (Dim == 2) {
     for (int b = 0; b < S; ++b) {
       const std::size_t row = static_cast<std::size_t>(sd.base[1] + b) * nn[0] + sd.base[0];
       for (int a = 0; a < S; ++a) {
         const double N = sd.w[0][a] * sd.w[1][b];
-        Vec<2> dN(sd.dw[0][a] * sd.w[1][b], sd.w[0][a] * sd.dw[1][b]);
-        fn(row + a, N, dN);
+        if constexpr (G) {
+          Vec<2> dN(sd.dw[0][a] * sd.w[1][b], sd.w[0][a] * sd.dw[1][b]);
+          fn(row + a, N, dN);
+        } else {
+          fn(row + a, N, NoGradient{});
+        }
       }
     }
   } else {
@@ -253,9 +272,13 @@ inline void for_each_node(const Grid<Dim>& g, const ShapeData<Dim, S>& sd, Fn&& 
         const double wbc = sd.w[1][b] * sd.w[2][c];
         for (int a = 0; a < S; ++a) {
           const double N = sd.w[0][a] * wbc;
-          Vec<3> dN(sd.dw[0][a] * wbc, sd.w[0][a] * sd.dw[1][b] * sd.w[2][c],
-                    sd.w[0][a] * sd.w[1][b] * sd.dw[2][c]);
-          fn(row + a, N, dN);
+          if constexpr (G) {
+            Vec<3> dN(sd.dw[0][a] * wbc, sd.w[0][a] * sd.dw[1][b] * sd.w[2][c],
+                      sd.w[0][a] * sd.w[1][b] * sd.dw[2][c]);
+            fn(row + a, N, dN);
+          } else {
+            fn(row + a, N, NoGradient{});
+          }
         }
       }
     }
@@ -267,30 +290,33 @@ inline void for_each_node(const Grid<Dim>& g, const ShapeData<Dim, S>& sd, Fn&& 
 ///     N_ip = wx[a] w_r,   grad N_ip = (dwx[a] w_r, wx[a] g_r[0] (, wx[a] g_r[1])),
 /// with wx = sd.w[0], dwx = sd.dw[0]. Hot kernels use it to hoist the per-row products out of the
 /// per-node work (the tensor-product structure of the shape functions); the visiting order is the
-/// same as for_each_node's.
-template <int Dim, int S, class Fn>
-inline void for_each_row(const Grid<Dim>& g, const ShapeData<Dim, S>& sd, Fn&& fn) {
+/// same as for_each_node's. Weights-only shape data pass NoGradient for g_r.
+template <int Dim, int S, bool G, class Fn>
+inline void for_each_row(const Grid<Dim>& g, const ShapeData<Dim, S, G>& sd, Fn&& fn) {
   const auto& nn = g.nodes_per_axis();
   if constexpr (Dim == 2) {
     for (int b = 0; b < S; ++b) {
       const std::size_t row = static_cast<std::size_t>(sd.base[1] + b) * nn[0] + sd.base[0];
-      fn(row, sd.w[1][b], Vec<1>(sd.dw[1][b]));
+      if constexpr (G) fn(row, sd.w[1][b], Vec<1>(sd.dw[1][b]));
+      else fn(row, sd.w[1][b], NoGradient{});
     }
   } else {
     for (int c = 0; c < S; ++c)
       for (int b = 0; b < S; ++b) {
         const std::size_t row =
             (static_cast<std::size_t>(sd.base[2] + c) * nn[1] + (sd.base[1] + b)) * nn[0] + sd.base[0];
-        fn(row, sd.w[1][b] * sd.w[2][c], Vec<2>(sd.dw[1][b] * sd.w[2][c], sd.w[1][b] * sd.dw[2][c]));
+        if constexpr (G) fn(row, sd.w[1][b] * sd.w[2][c], Vec<2>(sd.dw[1][b] * sd.w[2][c], sd.w[1][b] * sd.dw[2][c]));
+        else fn(row, sd.w[1][b] * sd.w[2][c], NoGradient{});
       }
   }
 }
 
-/// Evaluates the shape data of a particle at x with half-sizes l_p. kGradients = false: the
-/// weights only (sd.dw is left as it was), for points that never take a gradient.
-template <class Shape, int Dim, bool kGradients = true>
+/// Evaluates the shape data of a particle at x with half-sizes l_p (weights-only data: the
+/// weights only).
+template <class Shape, int Dim, bool kGradients>
 inline void evaluate(const Grid<Dim>& g, const Vec<Dim>& x, const Vec<Dim>& l_p,
-                     ShapeData<Dim, Shape::support>& sd) {
+                     ShapeData<Dim, Shape::support, kGradients>& sd) {
+#pragma GCC unroll 3
   for (int a = 0; a < Dim; ++a) {
     if constexpr (kGradients) {
       Shape::eval(g.axis(a), x[a], l_p[a], sd.base[a], sd.w[a], sd.dw[a]);

@@ -45,9 +45,9 @@ class NodeProjection {
 
   /// Fits the nodes of `box` to the points' values: weight(p) and value(p) per point, shape data
   /// sd[p] and position x[p] (the points the shape data were evaluated at).
-  template <class Weight, class Value>
+  template <bool G, class Weight, class Value>
   void fit(const Grid<Dim>& g, const NodeBox<Dim>& box, const StripeSchedule& schedule,
-           const std::vector<shape::ShapeData<Dim, S>>& sd, const std::vector<Vec<Dim>>& x, Weight&& weight,
+           const std::vector<shape::ShapeData<Dim, S, G>>& sd, const std::vector<Vec<Dim>>& x, Weight&& weight,
            Value&& value) {
     if (blocks_.size() != g.num_nodes() * NB) blocks_.assign(g.num_nodes() * NB, 0.0);
     if (well_posed_.size() != g.num_nodes()) well_posed_.assign(g.num_nodes(), 0);
@@ -154,7 +154,8 @@ class NodeProjection {
   /// The projected field at a point with shape data sd at x, a point of the last fit's box. Only
   /// nodes with weight count: fit() leaves every node of its box without (finite, positive)
   /// weight at a_I = 0, so no test per node is needed.
-  double at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x) const {
+  template <bool G>
+  double at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S, G>& sd, const Vec<Dim>& x) const {
     double value = 0.0;
     for_each_node_offset(g, sd, x, [&](std::size_t i, double N, double d0, double d1, double d2) {
       const double* a = blocks_.data() + i * NB + NH;  // Q . a_I, Q = (1, d)
@@ -175,8 +176,8 @@ class NodeProjection {
   /// fn(node, N_Ip, d_x, d_y, d_z) (d_z = 0 in 2D) over a point's nodes in for_each_node's order
   /// (and with its N_Ip: wx[a] times the row's weight). Row by row (shape::for_each_row): the row's offsets along
   /// y (and z) are set once per row, x's once per node, with no index arithmetic per node.
-  template <class Fn>
-  static void for_each_node_offset(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x,
+  template <bool G, class Fn>
+  static void for_each_node_offset(const Grid<Dim>& g, const shape::ShapeData<Dim, S, G>& sd, const Vec<Dim>& x,
                                    Fn&& fn) {
     const double inv_h = 1.0 / g.h();
     double off[Dim][S];

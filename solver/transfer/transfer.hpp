@@ -21,10 +21,10 @@ constexpr long no_particle = std::numeric_limits<long>::max();
 /// Evaluates every particle's shape data and returns the active node box (the nodes any particle
 /// touches). Particles outside [grid.min, grid.max] or with non-finite positions are reported
 /// through `bad` (smallest index) and get clamped shape data so the step can finish.
-/// kGradients = false: weights only (shape::evaluate), for points that never take a gradient.
-template <class Shape, int Dim, bool kGradients = true>
+/// Weights-only shape data (kGradients = false) get the weights only.
+template <class Shape, int Dim, bool kGradients>
 NodeBox<Dim> evaluate_shapes(const Grid<Dim>& g, const ParticleSet<Dim>& ps,
-                             std::vector<shape::ShapeData<Dim, Shape::support>>& sd, long& bad) {
+                             std::vector<shape::ShapeData<Dim, Shape::support, kGradients>>& sd, long& bad) {
   constexpr int S = Shape::support;
   const long n = static_cast<long>(ps.size());
   sd.resize(ps.size());
@@ -45,7 +45,7 @@ NodeBox<Dim> evaluate_shapes(const Grid<Dim>& g, const ParticleSet<Dim>& ps,
         tbad = std::min(tbad, p);
         for (int a = 0; a < Dim; ++a) x[a] = std::isfinite(x[a]) ? std::clamp(x[a], gmin[a], gmax[a]) : gmin[a];
       }
-      shape::evaluate<Shape, Dim, kGradients>(g, x, ps.l[p], sd[p]);
+      shape::evaluate<Shape>(g, x, ps.l[p], sd[p]);
       for (int a = 0; a < Dim; ++a) {
         tlo[a] = std::min(tlo[a], sd[p].base[a]);
         thi[a] = std::max(thi[a], sd[p].base[a] + S - 1);
@@ -76,8 +76,8 @@ int stripe_axis(const Grid<Dim>& g) {
   return best;
 }
 
-template <int Dim, int S>
-void build_schedule(const Grid<Dim>& g, const std::vector<shape::ShapeData<Dim, S>>& sd,
+template <int Dim, int S, bool G>
+void build_schedule(const Grid<Dim>& g, const std::vector<shape::ShapeData<Dim, S, G>>& sd,
                     StripeSchedule& schedule) {
   const int axis = stripe_axis(g);
   schedule.build(sd.size(), g.nodes_per_axis()[axis], S, [&](std::size_t p) { return sd[p].base[axis]; });
