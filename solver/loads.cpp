@@ -250,7 +250,7 @@ void share_samples(const ParticleSet<Dim>& ps, const std::vector<int>& cand, con
 
 template <int Dim>
 ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, const ParticleSet<Dim>& ps,
-                                  const SurfaceSamples<Dim>& samples) {
+                                  const SurfaceSamples<Dim>& samples, bool pore_pressure_forces) {
   auto body_index = [&](const std::string& name) {
     for (std::size_t b = 0; b < s.bodies.size(); ++b)
       if (s.bodies[b].name == name) return static_cast<int>(b);
@@ -337,7 +337,7 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, con
 
   // Prescribed pore pressure p on a boundary: -p A n on the saturated particles at it, split
   // between the phases by porosity when applied (for_each_force's `split`).
-  for (std::size_t i = 0; i < s.boundaries.size(); ++i) {
+  for (std::size_t i = 0; pore_pressure_forces && i < s.boundaries.size(); ++i) {
     const auto& b = s.boundaries[i];
     if (!b.fluid || *b.fluid != scene::FluidBc::pressure) continue;
     const std::string where = "boundaries/" + std::to_string(i) + "/fluid";

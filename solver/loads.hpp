@@ -67,12 +67,15 @@ class GridBoundary {
 
 /// Tractions and pressures on bodies' faces, as forces on the face particles; and prescribed pore
 /// pressures (`boundaries[].fluid: "pressure"`), as the same kind of force shared between the
-/// phases by porosity (`split`).
+/// phases by porosity (`split`), for formulations whose pore-pressure force is the weak form
+/// (integrated by parts, so the boundary term is a load). A formulation with the strong gradient
+/// -grad p (semi-implicit: the prescribed p is a Dirichlet value of its pressure equation, and the
+/// strong form already holds the boundary term) passes pore_pressure_forces = false.
 template <int Dim>
 class ParticleLoads {
  public:
   ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, const ParticleSet<Dim>& ps,
-                const SurfaceSamples<Dim>& samples);
+                const SurfaceSamples<Dim>& samples, bool pore_pressure_forces = true);
   /// Calls fn(p, f_p(t), face offset, split) for every loaded particle (serial; few particles).
   /// The force acts on the body's surface, at x_p + offset (the particle domain's face point, or
   /// the centroid of the named surface's share), so formulations evaluate the shape functions

@@ -114,7 +114,10 @@ class SemiImplicit final : public Formulation<Dim> {
         grid_(make_grid<Dim>(s, Shape::degree, Shape::bspline)),
         bcs_solid_(s, grid_, state.surfaces),
         bcs_fluid_(GridBoundary<Dim>::fluid(s, grid_, state.surfaces)),
-        loads_(s, grid_, state.solid, state.surfaces),
+        // A prescribed pore pressure is the Dirichlet value of the pressure equation on its face
+        // (face_pressure_); the strong gradient G p of the pressure forces holds its boundary term,
+        // so it is no load here (docs/formulations.md, "Prescribed pore pressure").
+        loads_(s, grid_, state.solid, state.surfaces, /*pore_pressure_forces=*/false),
         flip_(s.solver.flip),
         damping_(s.solver.damping),
         scene_damping_(s.solver.damping),
@@ -280,15 +283,10 @@ class SemiImplicit final : public Formulation<Dim> {
 
     scatter_soil(ps);                                                                       // (2)
     if (double_point_) scatter_water_points(ws);
-    for (const auto& ff : face_forces_) {
-      const double to_water = ff.split ? ps.n[ff.p] : 0.0;  // prescribed pore pressure: shared by porosity
+    for (const auto& ff : face_forces_)  // tractions on the soil (no pore-pressure loads: see loads_)
       for_each_loaded_node(
           grid_, ff, [&](std::size_t i) { return soil_.acc[i].m > transfer::empty_node_mass; },
-          [&](std::size_t i, double N) {
-            soil_.acc[i].f += (N * (1.0 - to_water)) * ff.f;
-            water_.acc[i].f += (N * to_water) * ff.f;
-          });
-    }
+          [&](std::size_t i, double N) { soil_.acc[i].f += N * ff.f; });
     lap("p2g");
 
     assemble_pressure(ps, ws);                                                              // (5a)-(5b)
@@ -624,8 +622,8 @@ class SemiImplicit final : public Formulation<Dim> {
       Vec<Dim> vw = Vec<Dim>::Zero();
       if (double_point_) {
         vw = w.m > transfer::empty_node_mass ? Vec<Dim>(w.mv / w.m) : Vec<Dim>::Zero();
-        // M_w = n_I sum S rho_w V (eq. 50); its body force M_w b (eq. 56). w.f holds only the water's
-        // share of prescribed pore pressures, n_p f, already taken by porosity at the point.
+        // M_w = n_I sum S rho_w V (eq. 50); its body force M_w b (eq. 56) below (w.f is zero here:
+        // no load acts on the water).
         w.m = e.n * e.w_raw;
       } else if (w.m > transfer::empty_node_mass) {
         vw = w.mv / w.m;

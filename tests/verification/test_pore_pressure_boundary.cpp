@@ -65,3 +65,84 @@ TEST(PorePressureBoundary, SubmergedColumnStaysHydrostatic) {
               top_drained, top_exact);
   EXPECT_LT(top_drained, 0.5 * top_exact);
 }
+
+// The semi-implicit formulations take a prescribed pore pressure as the Dirichlet value of their
+// pressure equation on the face; their pressure force is the strong gradient -grad p of the nodal
+// field, whose integration by parts already holds the boundary term, so no load is added (until
+// 2026-12-02 the load -p A n was added as well: a weightless column under p = 10 kPa took 20.0 kPa
+// inside, and double-point rejected the boundary because its soil points carry no pore fluid).
+namespace {
+
+json semi_implicit_column(const std::string& formulation, double gravity, double p_top) {
+  json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene.json");
+  s["formulation"] = formulation;
+  s["gravity"] = {0.0, -gravity};
+  s["grid"]["max"] = {0.1, 1.0};  // the top face is the grid's y_max
+  s["bodies"][0]["initial"] = json::object();
+  if (gravity > 0.0)
+    s["bodies"][0]["initial"] = {{"stress", "geostatic"}, {"k0", 1.0},
+                                 {"pore_pressure", "hydrostatic"}, {"water_table", 1.0 + p_top / (rho_w * gravity)}};
+  s["loads"] = json::array();
+  s["boundaries"].push_back({{"on", "y_max"}, {"solid", "free"}, {"fluid", "pressure"}, {"value", p_top}});
+  s["time"] = {{"end", 0.1}, {"dt", 1e-4}};
+  s["output"] = {{"interval", 0.1},
+                 {"monitor_interval", 0.01},
+                 {"monitors", json::array({{{"name", "base"}, {"at", {0.05, 0.00625}}, {"phase", "fluid"},
+                                            {"quantities", {"pore_pressure"}}},  // the lowest points' row
+                                           {{"name", "mid"}, {"at", {0.05, 0.5}}, {"phase", "solid"},
+                                            {"quantities", {"stress_yy"}}},
+                                           {{"name", "top"}, {"at", {0.05, 0.9875}}, {"phase", "solid"},
+                                            {"quantities", {"displacement_y"}}}})}};
+  return s;
+}
+
+class SemiImplicitPorePressureBoundary : public ::testing::TestWithParam<std::string> {};
+
+}  // namespace
+
+TEST_P(SemiImplicitPorePressureBoundary, PrescribedPressureIsNoLoad) {
+  const std::string& formulation = GetParam();
+  // Weightless: p = 10 kPa on top and nothing else; incompressible constituents, so p = 10 kPa
+  // throughout from the first step, the skeleton unloaded and at rest.
+  const double p_top = 1e4;
+  const auto t = swmpm::post::read_csv(
+      swmpm::testing::run_scene(semi_implicit_column(formulation, 0.0, p_top), formulation + "-p-top") + "/monitors.csv");
+  double worst_p = 0, worst_s = 0, worst_u = 0;
+  for (std::size_t k = 1; k < t.column("base.pore_pressure").size(); ++k) {  // row 0: the initial p = 0
+    worst_p = std::max(worst_p, std::abs(t.column("base.pore_pressure")[k] / p_top - 1));
+    worst_s = std::max(worst_s, std::abs(t.column("mid.stress_yy")[k]));
+    worst_u = std::max(worst_u, std::abs(t.column("top.displacement_y")[k]));
+  }
+  std::printf("%s, weightless column, p = %.0f Pa on top: base p deviation %.2e, |sigma'_yy| at mid-height %.2e Pa, "
+              "|u_y| at the top %.2e m\n",
+              formulation.c_str(), p_top, worst_p, worst_s, worst_u);
+  EXPECT_LT(worst_p, 1e-6);
+  EXPECT_LT(worst_s, 1e-3);   // Pa (against 1e4 Pa of pore pressure)
+  EXPECT_LT(worst_u, 1e-9);   // m
+
+  // Under gravity and 0.5 m of free water (p = rho_w g 0.5 on top), hydrostatic at rest.
+  const double p_sub = rho_w * g * depth;
+  const auto h = swmpm::post::read_csv(
+      swmpm::testing::run_scene(semi_implicit_column(formulation, g, p_sub), formulation + "-submerged") +
+      "/monitors.csv");
+  const double base_exact = rho_w * g * (1.0 + depth - 0.00625);
+  double worst_base = 0, worst_top_u = 0;
+  for (std::size_t k = 0; k < h.column("base.pore_pressure").size(); ++k) {
+    worst_base = std::max(worst_base, std::abs(h.column("base.pore_pressure")[k] / base_exact - 1));
+    worst_top_u = std::max(worst_top_u, std::abs(h.column("top.displacement_y")[k]));
+  }
+  std::printf("%s, submerged column (p = %.0f Pa on top): base p deviation from hydrostatic %.2e, |u_y| at the top "
+              "%.2e m\n",
+              formulation.c_str(), p_sub, worst_base, worst_top_u);
+  EXPECT_LT(worst_base, 1e-9);
+  EXPECT_LT(worst_top_u, 1e-9);  // m
+}
+
+namespace {
+std::string variant_name(const ::testing::TestParamInfo<std::string>& param) {
+  return param.param == "semi-implicit-single-point" ? "SinglePoint" : "DoublePoint";
+}
+}  // namespace
+
+INSTANTIATE_TEST_SUITE_P(BothVariants, SemiImplicitPorePressureBoundary,
+                         ::testing::Values("semi-implicit-single-point", "semi-implicit-double-point"), variant_name);
