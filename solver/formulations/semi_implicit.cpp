@@ -153,9 +153,22 @@ class SemiImplicit final : public Formulation<Dim> {
       throw std::runtime_error(name() + " needs water points (particles/fluid.vtu): run swmpm preprocess again");
     for (std::size_t i = 0; i < s.boundaries.size(); ++i) {
       const auto& b = s.boundaries[i];
-      if (b.fluid && *b.fluid == scene::FluidBc::pressure && face_of(b.on) < 0)
-        throw std::runtime_error("boundaries/" + std::to_string(i) + "/fluid: a prescribed pore pressure on a named "
-                                 "surface is not implemented in " + name() + " yet (grid faces only)");
+      if (!b.fluid || *b.fluid != scene::FluidBc::pressure) continue;
+      const std::string where = "boundaries/" + std::to_string(i) + "/fluid";
+      const int f = face_of(b.on);
+      if (f < 0)
+        throw std::runtime_error(where + ": a prescribed pore pressure on a named surface is not implemented in " +
+                                 name() + " yet (grid faces only)");
+      // The value acts through the face's nodes that carry water: some water must reach the face.
+      const ParticleSet<Dim>& wet = double_point_ ? state.fluid : state.solid;
+      const int axis = f / 2;
+      const double plane = f % 2 == 0 ? grid_.min()[axis] : grid_.max()[axis];
+      bool reaches = false;
+      for (std::size_t p = 0; p < wet.size() && !reaches; ++p)
+        reaches = std::abs(wet.x[p][axis] + (f % 2 == 0 ? -1.0 : 1.0) * wet.l[p][axis] - plane) <= 0.5 * wet.l[p][axis];
+      if (!reaches)
+        throw std::runtime_error(where + ": no water lies on \"" + b.on +
+                                 "\", so the prescribed pore pressure would act on nothing");
     }
     // Per grid face: drained (p prescribed, 0 or the face's value) unless the water cannot cross it.
     face_pressure_.fill(0.0);
@@ -385,14 +398,46 @@ class SemiImplicit final : public Formulation<Dim> {
     } else {
       power = fixed_order_sum(ps.size(), [&](std::size_t p) { return b.dot(ps.m[p] * ps.v[p] + ps.m_f[p] * ps.v_f[p]); });
     }
-    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool split) {
-      const double n = split ? ps.n[p] : 0.0;
-      // Double-point: the water velocity at the point from the last step's nodes (ps.v_f is filled
-      // for output only, complete_output_fields).
-      const Vec<Dim> vf = split && output_fields_stale_ ? water_velocity_at(sd_[p]) : ps.v_f[p];
-      power += f_p.dot((1.0 - n) * ps.v[p] + n * vf);
+    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool) {
+      power += f_p.dot(ps.v[p]);  // tractions act on the soil (no pore-pressure loads: see loads_)
     });
+    return power + pore_pressure_power();
+  }
+  /// Power of the prescribed pore pressures p_bar on their faces [W or W/m]: the traction -p_bar n
+  /// on the mixture, whose boundary term the strong gradient holds, times the mixture's volume flux
+  /// q = (1 - n) v_s + n v_w, at the face nodes with water of the last step:
+  ///   P = sum_K -p_bar (n . q_K) int_face S_K dA.
+  /// Without it the energy check counted no work for a flow that p_bar drives.
+  double pore_pressure_power() const {
+    double power = 0.0;
+    const auto& nn = grid_.nodes_per_axis();
+    for (int f = 0; f < 2 * Dim; ++f) {
+      if (!face_drained_[f] || face_pressure_[f] == 0.0) continue;
+      const int axis = f / 2, j = f % 2 == 0 ? 0 : nn[axis] - 1;
+      const double outward = f % 2 == 0 ? -1.0 : 1.0;
+      NodeBox<Dim> face = box_;
+      face.lo[axis] = face.hi[axis] = j;
+      if (face.empty() || box_.lo[axis] > j || box_.hi[axis] < j) continue;
+      grid_.for_each_node(face, [&](std::size_t i, const auto&) {  // serial: fixed summation order
+        if (!(water_.acc[i].m > transfer::empty_node_mass)) return;
+        const double n = node_[i].n;
+        const double qn = (1.0 - n) * soil_.v[i][axis] + n * water_.v[i][axis];
+        power -= face_pressure_[f] * outward * qn * face_integral(i, axis);
+      });
+    }
     return power;
+  }
+  /// Integral of node i's basis function over the grid face normal to `axis` [m^(Dim-1)]: the
+  /// product of support_integral's 1D factors along the other axes.
+  double face_integral(std::size_t i, int axis) const {
+    double v = 1.0;
+    for (int a = 0; a < Dim; ++a) {
+      const auto& ax = grid_.axis(a);
+      const int j = static_cast<int>(i % static_cast<std::size_t>(ax.nodes));
+      i /= static_cast<std::size_t>(ax.nodes);
+      if (a != axis) v *= support_1d(ax, j);
+    }
+    return v;
   }
   void set_initialisation(State<Dim>& st, const scene::Initialisation* phase) override {
     set_plastic(materials_, phase == nullptr || phase->plasticity);
@@ -454,15 +499,19 @@ class SemiImplicit final : public Formulation<Dim> {
       const auto& ax = grid_.axis(a);
       const int j = static_cast<int>(i % static_cast<std::size_t>(ax.nodes));
       i /= static_cast<std::size_t>(ax.nodes);
-      if constexpr (Shape::bspline) {
-        const int q = Shape::degree;
-        auto knot = [&](int t) { return std::clamp(t - q, 0, ax.cells) * ax.h; };
-        v *= (knot(j + q + 1) - knot(j)) / (q + 1);
-      } else {
-        v *= (j == 0 || j == ax.nodes - 1) ? 0.5 * ax.h : ax.h;
-      }
+      v *= support_1d(ax, j);
     }
     return v;
+  }
+  /// One axis' factor of support_integral: node j's 1D basis integrated along the axis [m].
+  static double support_1d(const Axis& ax, int j) {
+    if constexpr (Shape::bspline) {
+      const int q = Shape::degree;
+      auto knot = [&](int t) { return std::clamp(t - q, 0, ax.cells) * ax.h; };
+      return (knot(j + q + 1) - knot(j)) / (q + 1);
+    } else {
+      return (j == 0 || j == ax.nodes - 1) ? 0.5 * ax.h : ax.h;
+    }
   }
 
   void clear_nodes() {
@@ -574,7 +623,7 @@ class SemiImplicit final : public Formulation<Dim> {
 
   /// (2) Water points (double-point, eqs. 50-51, 56): sum S rho_w V, sum S m v, sum S m (the
   /// velocity weights of eq. 51), from which the node pass forms M_w and the body force
-  /// n_I (sum S rho_w V) b; the extent of the water in each support (free surface).
+  /// n_I (sum S rho_w V) b; the points' extent for the free surface (add_extent).
   void scatter_water_points(const ParticleSet<Dim>& ws) {
     const bool laplace_derived = kCellMoments && moments_->laplace_derived();
     wschedule_.run([&](int p) {

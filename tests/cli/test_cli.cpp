@@ -312,3 +312,19 @@ TEST(BadInput, SemiImplicitBsplinesNeedTwoPointsPerCell) {
   EXPECT_NE(r.err.find("bodies/0/particles_per_cell"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "run" / "run.json"));
 }
+
+// The semi-implicit formulations take a prescribed pore pressure as the face nodes' value in their
+// pressure equation: a face that no water reaches would silently do nothing, so the run is refused.
+TEST(BadInput, PorePressureFaceThatNoWaterReachesIsRejected) {
+  json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene.json");
+  s["formulation"] = "semi-implicit-double-point";
+  s["grid"]["max"] = {0.1, 1.1};  // the column's top (y = 1.0) is a cell below the grid face
+  s["loads"] = json::array();
+  s["boundaries"].push_back({{"on", "y_max"}, {"fluid", "pressure"}, {"value", 1e4}});
+  const fs::path dir = swmpm::testing::scratch("bad-pore-pressure-face");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const Result r = swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + (dir / "run").string() + " -q", dir);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("boundaries/3/fluid"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no water lies on \"y_max\""), std::string::npos) << r.err;
+}

@@ -1,4 +1,4 @@
-// A prescribed pore pressure on a boundary (`boundaries[].fluid: "pressure"`, explicit-single-point):
+// A prescribed pore pressure on a boundary (`boundaries[].fluid: "pressure"`). Explicit-single-point:
 // a saturated column under 0.5 m of free water, modelled as the pressure rho_w g 0.5 m on its top
 // face, stays hydrostatic at rest: the boundary load -p A n, shared (1 - n) by the skeleton and n by
 // the pore fluid, balances the initial state. With the top drained (p = 0) instead, the same
@@ -146,3 +146,41 @@ std::string variant_name(const ::testing::TestParamInfo<std::string>& param) {
 
 INSTANTIATE_TEST_SUITE_P(BothVariants, SemiImplicitPorePressureBoundary,
                          ::testing::Values("semi-implicit-single-point", "semi-implicit-double-point"), variant_name);
+
+// A prescribed pore pressure drives flow: a weightless column, nearly rigid (E = 1 GPa, so the
+// consolidation transient is over within milliseconds), p = 10 kPa on its base and drained on top.
+// Steady state: p = p_bar (1 - y / L) and the Darcy flux n (v_w - v_s) = k p_bar / (rho_w g L).
+// The energy check counts the work p_bar does on the face (before 2026-12-02 it counted none and
+// stopped this run at step 10 as "creating energy").
+TEST_P(SemiImplicitPorePressureBoundary, PressureDrivenSeepageMatchesDarcy) {
+  const std::string& formulation = GetParam();
+  const double p_bar = 1e4, L = 1.0, k = 1e-3, n0 = 0.3, y_mid = 0.50625;  // y_mid: a row of points
+  json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene.json");
+  s["formulation"] = formulation;
+  s["gravity"] = {0.0, 0.0};
+  s["grid"]["max"] = {0.1, L};
+  s["materials"][0]["youngs_modulus"] = 1e9;
+  s["loads"] = json::array();
+  s["boundaries"] = json::array(
+      {{{"on", "x_min"}, {"solid", "roller"}, {"fluid", "impermeable"}},
+       {{"on", "x_max"}, {"solid", "roller"}, {"fluid", "impermeable"}},
+       {{"on", "y_min"}, {"solid", "fixed"}, {"fluid", "pressure"}, {"value", p_bar}},
+       {{"on", "y_max"}, {"solid", "free"}, {"fluid", "drained"}}});
+  s["time"] = {{"end", 0.05}, {"dt", 2e-5}};
+  s["output"] = {{"interval", 0.05},
+                 {"monitor_interval", 0.01},
+                 {"monitors", json::array({{{"name", "w"}, {"at", {0.05, y_mid}}, {"phase", "fluid"},
+                                            {"quantities", {"pore_pressure", "velocity_y"}}},
+                                           {{"name", "s"}, {"at", {0.05, y_mid}}, {"phase", "solid"},
+                                            {"quantities", {"velocity_y"}}}})}};
+  const std::string run = swmpm::testing::run_scene(s, formulation + "-seepage");
+  const auto t = swmpm::post::read_csv(run + "/monitors.csv");
+  const double p = t.column("w.pore_pressure").back();
+  const double q = n0 * (t.column("w.velocity_y").back() - t.column("s.velocity_y").back());
+  const double p_exact = p_bar * (1.0 - y_mid / L), q_exact = k * p_bar / (1000.0 * 9.81 * L);
+  std::printf("%s, seepage driven by p = %.0f Pa on the base: p at y = %.4f m %.1f Pa (exact %.1f), Darcy flux "
+              "%.4e m/s (exact %.4e)\n",
+              formulation.c_str(), p_bar, y_mid, p, p_exact, q, q_exact);
+  EXPECT_NEAR(p / p_exact, 1.0, 0.01);
+  EXPECT_NEAR(q / q_exact, 1.0, 0.02);
+}
