@@ -538,17 +538,16 @@ class SemiImplicit final : public Formulation<Dim> {
       hi = hi.cwiseMax(x_hi);
     }
   };
-  /// Adds a water point's domain [x - l, x + l] (through the scatter schedule).
+  /// A water point's domain [x_lo, x_hi] = [x - l, x + l] joins the extent (through the scatter
+  /// schedule): kBaseExtent at its support's first node, here; otherwise at each node with
+  /// S > 0, in the P2G's node loop (add_node_extent).
   template <bool G>
-  void add_extent(const shape::ShapeData<Dim, S, G>& sd, const Vec<Dim>& x, const Vec<Dim>& l) {
-    const Vec<Dim> x_lo = x - l, x_hi = x + l;
-    if constexpr (kBaseExtent) {
-      extent_[grid_.index(sd.base)].add(x_lo, x_hi);
-    } else {
-      shape::for_each_node(grid_, sd, [&](std::size_t i, double N, const auto&) {
-        if (N > 0.0) extent_[i].add(x_lo, x_hi);
-      });
-    }
+  void add_base_extent(const shape::ShapeData<Dim, S, G>& sd, const Vec<Dim>& x_lo, const Vec<Dim>& x_hi) {
+    if constexpr (kBaseExtent) extent_[grid_.index(sd.base)].add(x_lo, x_hi);
+  }
+  void add_node_extent(std::size_t i, double N, const Vec<Dim>& x_lo, const Vec<Dim>& x_hi) {
+    if constexpr (!kBaseExtent)
+      if (N > 0.0) extent_[i].add(x_lo, x_hi);
   }
   /// The extent of the water inside node i's support.
   Extent water_extent(std::size_t i, const std::array<int, Dim>& ijk) const {
@@ -597,7 +596,9 @@ class SemiImplicit final : public Formulation<Dim> {
       const Vec<Dim> mv = m * ps.v[p];
       const double mf = sp ? ps.m_f[p] : 0.0;
       const Vec<Dim> mfv = sp ? Vec<Dim>(mf * ps.v_f[p]) : Vec<Dim>::Zero();
-      if (sp && mf > 0.0) add_extent(sd_[p], ps.x[p], ps.l[p]);
+      const bool wet = sp && mf > 0.0;  // carries water: joins the free surface's extent
+      const Vec<Dim> x_lo = ps.x[p] - ps.l[p], x_hi = ps.x[p] + ps.l[p];
+      if (wet) add_base_extent(sd_[p], x_lo, x_hi);
       if constexpr (kCellMoments) {  // (5a)'s moments in the same pass (assemble_operators_from_moments)
         const Weights c = soil_weights(ps, p, laplace_derived);
         if (sp) moments_->template add<true, true>(grid_, sd_[p].base, ps.x[p], c.s, c.w, c.l);
@@ -616,6 +617,7 @@ class SemiImplicit final : public Formulation<Dim> {
           auto& w = water_.acc[i];
           w.m += N * mf;
           w.mv += N * mfv;
+          if (wet) add_node_extent(i, N, x_lo, x_hi);
         }
       });
     });
@@ -623,13 +625,14 @@ class SemiImplicit final : public Formulation<Dim> {
 
   /// (2) Water points (double-point, eqs. 50-51, 56): sum S rho_w V, sum S m v, sum S m (the
   /// velocity weights of eq. 51), from which the node pass forms M_w and the body force
-  /// n_I (sum S rho_w V) b; the points' extent for the free surface (add_extent).
+  /// n_I (sum S rho_w V) b; the points' extent for the free surface (add_base_extent, add_node_extent).
   void scatter_water_points(const ParticleSet<Dim>& ws) {
     const bool laplace_derived = kCellMoments && moments_->laplace_derived();
     wschedule_.run([&](int p) {
       const double V = ws.V[p], m = ws.m[p], rhoV = rho_w_points_[ws.material[p]] * V;
       const Vec<Dim> mv = m * ws.v[p];
-      add_extent(sdw_[p], ws.x[p], ws.l[p]);
+      const Vec<Dim> x_lo = ws.x[p] - ws.l[p], x_hi = ws.x[p] + ws.l[p];
+      add_base_extent(sdw_[p], x_lo, x_hi);
       if constexpr (kCellMoments) {
         const Weights c = water_weights(ws, p, laplace_derived);
         moments_->template add<false, true>(grid_, sdw_[p].base, ws.x[p], 0.0, c.w, c.l);
@@ -640,6 +643,7 @@ class SemiImplicit final : public Formulation<Dim> {
         w.mv += N * mv;
         auto& e = node_[i];
         e.w_raw += N * rhoV;
+        add_node_extent(i, N, x_lo, x_hi);
       });
     });
   }
