@@ -351,14 +351,10 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, con
       add_named(e, k, -1, std::nullopt, wet, [&](double, const Vec<Dim>& an) -> Vec<Dim> { return -b.fluid_value * an; });
     } else {
       // The saturated particles whose face point lies on the grid face.
-      const int f = face_index(b.on), axis = f / 2;
-      const double outward = f % 2 == 0 ? -1.0 : 1.0;
-      const double plane = f % 2 == 0 ? g.min()[axis] : g.max()[axis];
-      for (std::size_t p = 0; p < ps.size(); ++p) {
-        if (!wet(p) || !(ps.faces[p] & (1u << f))) continue;
-        if (std::abs(ps.x0[p][axis] + outward * ps.l[p][axis] - plane) > 0.5 * ps.l[p][axis]) continue;
-        add_axis_face(e, p, f, -b.fluid_value, nullptr);
-      }
+      const int f = face_index(b.on);
+      for (std::size_t p = 0; p < ps.size(); ++p)
+        if (wet(p) && (ps.faces[p] & (1u << f)) && domain_ends_on_face(g, f, ps.x0[p], ps.l[p]))
+          add_axis_face(e, p, f, -b.fluid_value, nullptr);
     }
     if (e.ids.empty())
       throw std::runtime_error(where + ": no saturated particle lies on \"" + b.on +

@@ -1,6 +1,7 @@
 // Time functions, boundary conditions on grid faces, and particle loads (tractions, pressures).
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -164,5 +165,15 @@ void for_each_loaded_node(const Grid<Dim>& g, const FaceForce<Dim, S>& ff, HasMa
 
 /// Face index 2 * axis + side of a face name x_min .. z_max.
 int face_index(const std::string& name);
+
+/// Whether a particle domain [x - l, x + l] ends on grid face f (face_index's numbering), to
+/// within half its half-size: the particles a prescribed pore pressure on that face reaches.
+template <int Dim>
+bool domain_ends_on_face(const Grid<Dim>& g, int f, const Vec<Dim>& x, const Vec<Dim>& l) {
+  const int axis = f / 2;
+  const double outward = f % 2 == 0 ? -1.0 : 1.0;
+  const double plane = f % 2 == 0 ? g.min()[axis] : g.max()[axis];
+  return std::abs(x[axis] + outward * l[axis] - plane) <= 0.5 * l[axis];
+}
 
 }  // namespace swmpm

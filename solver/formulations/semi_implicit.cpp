@@ -161,11 +161,8 @@ class SemiImplicit final : public Formulation<Dim> {
                                  name() + " yet (grid faces only)");
       // The value acts through the face's nodes that carry water: some water must reach the face.
       const ParticleSet<Dim>& wet = double_point_ ? state.fluid : state.solid;
-      const int axis = f / 2;
-      const double plane = f % 2 == 0 ? grid_.min()[axis] : grid_.max()[axis];
       bool reaches = false;
-      for (std::size_t p = 0; p < wet.size() && !reaches; ++p)
-        reaches = std::abs(wet.x[p][axis] + (f % 2 == 0 ? -1.0 : 1.0) * wet.l[p][axis] - plane) <= 0.5 * wet.l[p][axis];
+      for (std::size_t p = 0; p < wet.size() && !reaches; ++p) reaches = domain_ends_on_face(grid_, f, wet.x[p], wet.l[p]);
       if (!reaches)
         throw std::runtime_error(where + ": no water lies on \"" + b.on +
                                  "\", so the prescribed pore pressure would act on nothing");
@@ -215,7 +212,7 @@ class SemiImplicit final : public Formulation<Dim> {
     p_node_.assign(nodes, 0.0);
     A_soil_.assign(nodes, Vec<Dim>::Zero());
     A_water_.assign(nodes, Vec<Dim>::Zero());
-    for (std::size_t i = 0; i < nodes; ++i) support_[i] = support_integral(i);
+    for (std::size_t i = 0; i < nodes; ++i) support_[i] = basis_integral(i);
     D_solid_.assign(nodes * KD, Vec<Dim>::Zero());
     D_water_.assign(nodes * KD, Vec<Dim>::Zero());
     if constexpr (kCellMoments) {
@@ -422,22 +419,10 @@ class SemiImplicit final : public Formulation<Dim> {
         if (!(water_.acc[i].m > transfer::empty_node_mass)) return;
         const double n = node_[i].n;
         const double qn = (1.0 - n) * soil_.v[i][axis] + n * water_.v[i][axis];
-        power -= face_pressure_[f] * outward * qn * face_integral(i, axis);
+        power -= face_pressure_[f] * outward * qn * basis_integral(i, axis);
       });
     }
     return power;
-  }
-  /// Integral of node i's basis function over the grid face normal to `axis` [m^(Dim-1)]: the
-  /// product of support_integral's 1D factors along the other axes.
-  double face_integral(std::size_t i, int axis) const {
-    double v = 1.0;
-    for (int a = 0; a < Dim; ++a) {
-      const auto& ax = grid_.axis(a);
-      const int j = static_cast<int>(i % static_cast<std::size_t>(ax.nodes));
-      i /= static_cast<std::size_t>(ax.nodes);
-      if (a != axis) v *= support_1d(ax, j);
-    }
-    return v;
   }
   void set_initialisation(State<Dim>& st, const scene::Initialisation* phase) override {
     set_plastic(materials_, phase == nullptr || phase->plasticity);
@@ -493,25 +478,23 @@ class SemiImplicit final : public Formulation<Dim> {
 
   /// Integral of node i's basis function over the grid [m^Dim]: linear/GIMP h (h/2 on a grid
   /// face); clamped B-splines of degree q (t_{i+q+1} - t_i) / (q + 1) from the open knot vector.
-  double support_integral(std::size_t i) const {
+  /// except_axis >= 0: over the grid face normal to that axis [m^(Dim-1)] (the other axes' factors).
+  double basis_integral(std::size_t i, int except_axis = -1) const {
     double v = 1.0;
     for (int a = 0; a < Dim; ++a) {
       const auto& ax = grid_.axis(a);
       const int j = static_cast<int>(i % static_cast<std::size_t>(ax.nodes));
       i /= static_cast<std::size_t>(ax.nodes);
-      v *= support_1d(ax, j);
+      if (a == except_axis) continue;
+      if constexpr (Shape::bspline) {
+        const int q = Shape::degree;
+        auto knot = [&](int t) { return std::clamp(t - q, 0, ax.cells) * ax.h; };
+        v *= (knot(j + q + 1) - knot(j)) / (q + 1);
+      } else {
+        v *= (j == 0 || j == ax.nodes - 1) ? 0.5 * ax.h : ax.h;
+      }
     }
     return v;
-  }
-  /// One axis' factor of support_integral: node j's 1D basis integrated along the axis [m].
-  static double support_1d(const Axis& ax, int j) {
-    if constexpr (Shape::bspline) {
-      const int q = Shape::degree;
-      auto knot = [&](int t) { return std::clamp(t - q, 0, ax.cells) * ax.h; };
-      return (knot(j + q + 1) - knot(j)) / (q + 1);
-    } else {
-      return (j == 0 || j == ax.nodes - 1) ? 0.5 * ax.h : ax.h;
-    }
   }
 
   void clear_nodes() {
@@ -564,8 +547,7 @@ class SemiImplicit final : public Formulation<Dim> {
       std::array<int, Dim> b = lo;
       for (;;) {
         const Extent& c = extent_[grid_.index(b)];
-        e.lo = e.lo.cwiseMin(c.lo);
-        e.hi = e.hi.cwiseMax(c.hi);
+        e.add(c.lo, c.hi);
         int a = 0;
         for (; a < Dim; ++a) {
           if (++b[a] < lo[a] + n[a]) break;

@@ -229,14 +229,12 @@ using BSpline3 = BSpline<3>;
 /// which every pass over those points streams.
 template <int Dim, int S, bool kGradients = true>
 struct ShapeData {
-  static constexpr bool gradients = true;
   std::array<int, Dim> base;
   double w[Dim][S];
   double dw[Dim][S];
 };
 template <int Dim, int S>
 struct ShapeData<Dim, S, false> {
-  static constexpr bool gradients = false;
   std::array<int, Dim> base;
   double w[Dim][S];
 };
