@@ -33,7 +33,14 @@ PointArray& PointCloud::add(const std::string& name, int components) {
   return arrays.back();
 }
 
-void write_vtu(const std::string& path, const PointCloud& cloud) {
+VtuCompression vtu_compression(const std::string& name) {
+  if (name == "zlib") return VtuCompression::zlib;
+  if (name == "lz4") return VtuCompression::lz4;
+  if (name == "none") return VtuCompression::none;
+  throw std::invalid_argument("output.compression: \"" + name + "\" is not one of zlib, lz4, none");
+}
+
+void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression compression) {
   const auto n = static_cast<vtkIdType>(cloud.size());
   // The writer only reads: VTK arrays borrow the cloud's memory (SetArray with save = 1) instead of
   // copying it, which keeps a frame's peak memory to the cloud itself.
@@ -73,7 +80,18 @@ void write_vtu(const std::string& path, const PointCloud& cloud) {
   writer->SetInputData(grid);
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();  // raw binary
-  writer->SetCompressorTypeToZLib();
+  switch (compression) {
+    case VtuCompression::zlib:
+      writer->SetCompressorTypeToZLib();
+      writer->SetCompressionLevel(1);
+      break;
+    case VtuCompression::lz4:
+      writer->SetCompressorTypeToLZ4();
+      break;
+    case VtuCompression::none:
+      writer->SetCompressorTypeToNone();
+      break;
+  }
   if (writer->Write() != 1) throw std::runtime_error(path + ": could not write VTU file");
 }
 

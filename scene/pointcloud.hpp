@@ -31,8 +31,15 @@ struct PointCloud {
   PointArray& add(const std::string& name, int components);
 };
 
-/// Writes a VTK XML unstructured grid of vertex cells (binary, zlib-compressed).
-void write_vtu(const std::string& path, const PointCloud& cloud);
+/// Compression of a VTU file's appended binary data (scene key output.compression).
+enum class VtuCompression { zlib, lz4, none };
+/// "zlib", "lz4" or "none" (the scene parser has checked the name).
+VtuCompression vtu_compression(const std::string& name);
+
+/// Writes a VTK XML unstructured grid of vertex cells, binary appended data. zlib runs at level 1:
+/// on the solver's float fields it gives files within 1 % of the default level 6 (B4 12^2 frames:
+/// 337 against 334 MB) in 70 % of the time.
+void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression compression = VtuCompression::zlib);
 /// Reads a .vtu written by write_vtu (or by another tool): every point-data array is returned.
 PointCloud read_vtu(const std::string& path);
 

@@ -148,6 +148,7 @@ struct Monitor {
 struct Output {
   double interval = 0.0;          // s between VTU frames (0: first and last only)
   double monitor_interval = 0.0;  // s between monitor rows (0: every step)
+  std::string compression = "zlib";  // VTU frames: zlib (level 1) | lz4 | none
   std::vector<Monitor> monitors;
 };
 

@@ -463,6 +463,9 @@ TEST(SceneErrors, UnknownEnumerationValuesListTheValidOnes) {
   json r = scene_2d();
   r["output"]["monitors"][0]["phase"] = "water";
   EXPECT_TRUE(reports(r, "/output/monitors/0/phase", "expected one of: solid, fluid"));
+  json w = scene_2d();
+  w["output"]["compression"] = "gzip";
+  EXPECT_TRUE(reports(w, "/output/compression", "got \"gzip\", expected one of: zlib, lz4, none"));
   json s = scene_3d();
   s["solver"]["stabilisation"]["pressure"] = "mfvp";
   EXPECT_TRUE(reports(s, "/solver/stabilisation/pressure", "mfvp-constant, mfvp-linear"));
