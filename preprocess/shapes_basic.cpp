@@ -94,10 +94,7 @@ std::string join(const std::vector<std::string>& v) {
   return out.empty() ? "none" : out;
 }
 
-bool is_axis_face(const std::string& name) {
-  static const std::vector<std::string> faces{"x_min", "x_max", "y_min", "y_max", "z_min", "z_max"};
-  return std::find(faces.begin(), faces.end(), name) != faces.end();
-}
+bool is_axis_face(const std::string& name) { return scene::grid_face_index(name) >= 0; }
 
 bool has(const std::vector<std::string>& v, const std::string& s) {
   return std::find(v.begin(), v.end(), s) != v.end();

@@ -2321,6 +2321,12 @@ struct DuplicateKeys {
 
 }  // namespace
 
+int grid_face_index(const std::string& name) {
+  const auto& faces = face_names();
+  const auto it = std::find(faces.begin(), faces.end(), name);
+  return it == faces.end() ? -1 : static_cast<int>(it - faces.begin());
+}
+
 Scene parse_scene(const nlohmann::json& j, const std::string& label) {
   return SceneParser(j, label).parse();
 }

@@ -257,6 +257,9 @@ constexpr int kMaxNamedSurfaces = 32 - kFirstSurfaceBit;  // 26
 /// solver (loads) learn which face bit a name has.
 std::vector<std::string> surface_bit_names(const Scene& s);
 
+/// Index 2 axis + side of a grid face ("x_min" 0, "x_max" 1, ... "z_max" 5); -1 for any other
+/// name (a named surface: a gmsh physical group).
+int grid_face_index(const std::string& name);
 std::string to_string(Formulation f);
 std::string to_string(ShapeFunction f);
 std::string to_string(MaterialModel m);

@@ -53,18 +53,14 @@ double TimeFunction::operator()(double t) const {
 }
 
 int face_index(const std::string& name) {
-  static const char* names[] = {"x_min", "x_max", "y_min", "y_max", "z_min", "z_max"};
-  for (int f = 0; f < 6; ++f)
-    if (name == names[f]) return f;
-  throw std::runtime_error("unknown face \"" + name + "\"");
+  const int f = scene::grid_face_index(name);
+  if (f < 0) throw std::runtime_error("unknown face \"" + name + "\"");
+  return f;
 }
 
 namespace {
 
-bool is_axis_face(const std::string& name) {
-  return name.size() == 5 && (name[0] == 'x' || name[0] == 'y' || name[0] == 'z') &&
-         (name.substr(1) == "_min" || name.substr(1) == "_max");
-}
+bool is_axis_face(const std::string& name) { return scene::grid_face_index(name) >= 0; }
 
 /// k of the named surface `name` (face bit kFirstSurfaceBit + k); `what` names the JSON place.
 int surface_index(const scene::Scene& s, const std::string& name, const std::string& what) {

@@ -155,7 +155,7 @@ class SemiImplicit final : public Formulation<Dim> {
       const auto& b = s.boundaries[i];
       if (!b.fluid || *b.fluid != scene::FluidBc::pressure) continue;
       const std::string where = "boundaries/" + std::to_string(i) + "/fluid";
-      const int f = face_of(b.on);
+      const int f = scene::grid_face_index(b.on);
       if (f < 0)
         throw std::runtime_error(where + ": a prescribed pore pressure on a named surface is not implemented in " +
                                  name() + " yet (grid faces only)");
@@ -172,7 +172,7 @@ class SemiImplicit final : public Formulation<Dim> {
     face_drained_.fill(true);
     for (const auto& f : bcs_fluid_.faces()) face_drained_[2 * f.axis + f.side] = false;
     for (const auto& b : s.boundaries)
-      if (b.fluid && *b.fluid == scene::FluidBc::pressure) face_pressure_[face_of(b.on)] = b.fluid_value;
+      if (b.fluid && *b.fluid == scene::FluidBc::pressure) face_pressure_[scene::grid_face_index(b.on)] = b.fluid_value;
 
     perm_.resize(s.materials.size());
     for (std::size_t k = 0; k < s.materials.size(); ++k) {
@@ -464,12 +464,6 @@ class SemiImplicit final : public Formulation<Dim> {
     double drag = 0.0;                  // Q_I dt (kg)
   };
 
-  static int face_of(const std::string& on) {
-    static const char* names[] = {"x_min", "x_max", "y_min", "y_max", "z_min", "z_max"};
-    for (int f = 0; f < 6; ++f)
-      if (on == names[f]) return f;
-    return -1;
-  }
   static int fluid_material_of(const scene::Scene& s, const ParticleSet<Dim>& ps, int p) {
     if (!ps.fluid_material.empty() && ps.fluid_material[p] >= 0) return ps.fluid_material[p];
     const auto& body = s.bodies[ps.body[p]];
