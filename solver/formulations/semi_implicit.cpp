@@ -736,11 +736,15 @@ class SemiImplicit final : public Formulation<Dim> {
     const auto& nn = grid_.nodes_per_axis();
     grid_.for_each_node(box_, [&](std::size_t i, const auto& ijk) {
       if (!(water_.acc[i].m > transfer::empty_node_mass)) return;
+      // A node on several drained faces (a corner) takes a `pressure` face's value over p = 0,
+      // whatever the order of the boundaries; of two `pressure` faces the first in x, y, z order.
       int face = -1;
-      for (int a = 0; a < Dim && face < 0; ++a) {
-        if (ijk[a] == 0 && face_drained_[2 * a]) face = 2 * a;
-        if (ijk[a] == nn[a] - 1 && face_drained_[2 * a + 1]) face = 2 * a + 1;
-      }
+      for (int a = 0; a < Dim; ++a)
+        for (int side = 0; side < 2; ++side) {
+          const int f = 2 * a + side;
+          if (ijk[a] != (side ? nn[a] - 1 : 0) || !face_drained_[f]) continue;
+          if (face < 0 || (face_pressure_[face] == 0.0 && face_pressure_[f] != 0.0)) face = f;
+        }
       double p_surface = 0.0;
       const bool surface = face < 0 && free_surface(i, ijk, p_surface);
       if (face >= 0 || surface) {
