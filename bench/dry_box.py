@@ -120,7 +120,7 @@ def main():
                     help="runs per case; the table gives the fastest (timing noise on shared machines is additive) and the median")
     a = ap.parse_args()
     work = tempfile.mkdtemp(prefix="swmpm-bench-")
-    base = run(a.swmpm, scene(2, 2, 0.2, 2, a.formulation, a.shape), 1, work)["peak_memory_bytes"]
+    base = run(a.swmpm, scene(2, 2, 0.2, 2, a.formulation, shape=a.shape, material=a.material), 1, work)["peak_memory_bytes"]
     rows = []
     for name in a.sizes.split(","):
       dim, n, ext = SIZES[name]
