@@ -995,9 +995,10 @@ const Table& output_table() {
            .meaning = "Simulated time between rows of monitors.csv (0: every step)."},
           {.name = "compression", .type = Type::choice, .def = "zlib", .values = {"zlib", "lz4", "none"},
            .meaning = "Compression of the VTU frames' binary data: `zlib` (level 1; read by every VTU reader), "
-                      "`lz4` (frames written about 3 times faster, files about 35 % larger; VTK-based readers "
-                      "such as ParaView read it, some standalone readers do not) or `none`. B4 12^2 "
-                      "double-point frame (172k points): 0.44 / 0.15 / 0.22 s (docs/verification.md)."},
+                      "`lz4` (frames written about 7 times faster, files about 35 % larger; VTK-based readers "
+                      "such as ParaView read it, some standalone readers do not) or `none` (fastest, files about "
+                      "2.3 times zlib's). B4 12^2 double-point frame (172k points): 0.34 / 0.048 / 0.035 s "
+                      "(docs/verification.md)."},
           {.name = "monitors", .type = Type::objects, .def = json::array(),
            .meaning = "Time histories, see [monitor](#monitor)."},
       }};
