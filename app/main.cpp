@@ -24,9 +24,9 @@ namespace {
 /// 128 kB free, and serves blocks above 128 kB to 32 MB by mmap: a frame's arrays and the VTU
 /// compressor's per-block buffers were then mapped, zeroed by page faults and unmapped (with a
 /// TLB flush on every core) each frame. Keeping freed memory for reuse cut the frame time of B4
-/// 12^2 double-point (172k points) from 0.135 to 0.046 s with lz4 and from 0.43 to 0.34 s with
-/// zlib, and the elastic column's (160 points) from 15 to 2.6 ms; peak memory is unchanged
-/// (240 MB at B4 12^2). docs/verification.md, "Cost of writing frames".
+/// 12^2 double-point (172k points) from 0.136 to 0.047 s with lz4 and from 0.43 to 0.34 s with
+/// zlib, and the elastic column's (160 points) from 15 to 2.4 ms; peak memory at B4 12^2 is
+/// unchanged (240 MB). docs/verification.md, "Cost of writing frames".
 void keep_freed_memory() {
   mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest: blocks up to 32 MB come from the heap
   mallopt(M_TRIM_THRESHOLD, 256 << 20);  // give back only when 256 MB are free at the heap's top

@@ -102,6 +102,7 @@ class Runner {
     }
     auto formulation = make_formulation<Dim>(scene_, state_);
     reporters_ = make_materials<Dim>(scene_);  // frames' material state fields (pure functions of the particles)
+    compression_ = scene::vtu_compression(scene_.output.compression);
     threads_ = omp_get_max_threads();
 
     const fs::path out = dir_ / "output";
@@ -384,7 +385,7 @@ class Runner {
     double total = 0.0;
     for (double s : st.seconds) total += s;
     // Shares of the stages' sum; the stages cover the formulation's step only, so say how much of
-    // the loop that is (the rest: frames, monitors, energy checks, time-step control).
+    // the loop that is, and the frames' share (the rest: monitors, energy checks, time-step control).
     split << "stages (" << fmt(100.0 * total / std::max(loop_wall, 1e-300), 3) << "% of the time loop, "
           << frame_count_ << " frames " << fmt(100.0 * frame_seconds_ / std::max(loop_wall, 1e-300), 3)
           << "%; the rest writes monitors and checks energy):";
@@ -455,12 +456,11 @@ class Runner {
     std::snprintf(name, sizeof name, "solid_%06d.vtu", k);
     scene::PointCloud solid = particles_to_cloud(state_.solid);
     add_material_reports(solid, state_.solid, reporters_);
-    const scene::VtuCompression compression = scene::vtu_compression(scene_.output.compression);
-    scene::write_vtu((dir_ / "output" / name).string(), solid, compression);
+    scene::write_vtu((dir_ / "output" / name).string(), solid, compression_);
     frames_.push_back({t, "solid", 0, name});
     if (state_.fluid.size()) {
       std::snprintf(name, sizeof name, "fluid_%06d.vtu", k);
-      scene::write_vtu((dir_ / "output" / name).string(), water_points_to_cloud(state_.fluid), compression);
+      scene::write_vtu((dir_ / "output" / name).string(), water_points_to_cloud(state_.fluid), compression_);
       frames_.push_back({t, "fluid", 1, name});
     }
     scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);
@@ -475,6 +475,7 @@ class Runner {
   int threads_ = 1;
   std::vector<scene::PvdEntry> frames_;  // one entry per phase and frame
   std::vector<std::unique_ptr<MaterialModel<Dim>>> reporters_;  // per scene material, for add_material_reports
+  scene::VtuCompression compression_ = scene::VtuCompression::zlib;  // output.compression
   int frame_count_ = 0;
   double frame_seconds_ = 0.0;  // wall time spent writing frames (part of loop_seconds)
   double last_good_frame_time_ = 0.0;
