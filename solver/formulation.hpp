@@ -87,11 +87,12 @@ class Formulation {
   /// Cells holding at least one particle, at the last step.
   virtual std::size_t active_cells(const State<Dim>& s) const = 0;
   /// Fills the fields a formulation keeps only for output (semi-implicit double-point: the pore
-  /// pressure and the water velocity interpolated at the soil points), from the last completed
-  /// step's nodal solution. The time loop
-  /// calls it before monitors, frames and in-memory snapshots read the particles; the step itself
-  /// does not need these fields, so they are not computed every step.
-  virtual void complete_output_fields(State<Dim>& /*s*/) {}
+  /// pressure and the water velocity interpolated at the soil points, from the last completed
+  /// step's nodal solution; with `water_points`, also the water points' porosity and volume where
+  /// they now are). The time loop calls it before monitors (soil fields only), frames and
+  /// in-memory snapshots (`water_points`) read the particles; the step itself does not need these
+  /// fields, so they are not computed every step.
+  virtual void complete_output_fields(State<Dim>& /*s*/, bool /*water_points*/) {}
   const StageTimes& stage_times() const { return times_; }
   /// Run totals a formulation reports beside the stage times (run.json "counters", the log's last
   /// lines): name, value, unit. Empty unless something happened (double-point: escaped water).

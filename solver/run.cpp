@@ -267,7 +267,7 @@ class Runner {
       }
       const bool monitor_due = state_.time >= next_monitor - eps_t || phase_ended;
       if (checkpoint || frame_due || (monitor_due && monitors_read_output_fields))
-        formulation->complete_output_fields(state_);
+        formulation->complete_output_fields(state_, checkpoint || frame_due);
       if (checkpoint) {
         last_good.copy_state_from(state_.solid);  // reuses capacity: no allocation after the first copy
         last_good_water.copy_state_from(state_.fluid);
@@ -317,11 +317,11 @@ class Runner {
       log_.line("the last frame (t = " + fmt(last_good_frame_time_) + " s) is the last good state; the run failed in step " +
                 std::to_string(state_.step + 1));
     } else if (status == "interrupted") {
-      formulation->complete_output_fields(state_);
+      formulation->complete_output_fields(state_, true);
       write_frame(state_.time);
       log_.failure("interrupted at t = " + fmt(state_.time) + " s; wrote the current state as the final frame");
     } else if (frames_.empty() || frames_.back().time < state_.time - eps_t) {
-      formulation->complete_output_fields(state_);
+      formulation->complete_output_fields(state_, true);
       write_frame(state_.time);
     }
 

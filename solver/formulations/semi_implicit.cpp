@@ -15,8 +15,9 @@
 //   (0) reorder points into scatter order every 10 steps (memory locality only)
 //   (1) shape data of soil (and water) points, active node box, scatter schedules
 //   (2) P2G: M_s, M_s v_s, nodal porosity and conductivity (soil-mass weighted, eqs. 44-47),
-//       water mass and momentum (eqs. 50-51), effective-stress forces; the points' moments of
-//       (5a) in the same pass (cell-moment path)
+//       water mass and momentum (eqs. 50-51; double-point: each water point first takes its
+//       porosity and volume from the nodal porosity), effective-stress forces; the points'
+//       moments of (5a) in the same pass (cell-moment path)
 //   (5a)-(5b) L, D_s, D_w (eqs. 61-63, L symmetric: c(n) inside the quadrature), the nodal p^t
 //       (linear projection of the points' pressures), free-surface and drained nodes
 //   (3)-(4) body forces M b at the nodes; water and soil predictors (eqs. 52-53) with the drag implicit in both velocities (the
@@ -27,10 +28,11 @@
 //   (6) corrections v^{t+1} = v* - dt/M (G dp) (eqs. 64-68, G the strong gradient S_K grad S_J);
 //       BCs on v^{t+1}; pressure update (incremental, or node-wise remap eq. 77)
 //   (7) G2P (FLIP/PIC) of the soil points, positions; MUSL remap of the soil velocity (step 8a)
-//   (8) F, V, porosity (1 - n) J = 1 - n0, permeability law; double-point water points: G2P,
-//       positions, porosity and volume in one pass (step 8h with the M_s erratum, eq. 36); stress
-//       by the material model. (Stage timers: the water points' G2P is in "stress and porosity",
-//       the moments in "p2g", since 2026-12-02.)
+//   (8) F, V, porosity (1 - n) J = 1 - n0, permeability law; double-point water points: G2P and
+//       positions; stress by the material model. The water points' porosity and volume (step 8h
+//       with the M_s erratum, eq. 36) come from the next step's nodal porosity, in its water P2G
+//       (docs/formulations.md, "Water points' porosity"). (Stage timers: the water points' G2P is
+//       in "stress and porosity", the moments in "p2g", since 2026-12-02.)
 #include <omp.h>
 
 #include <algorithm>
@@ -251,7 +253,7 @@ class SemiImplicit final : public Formulation<Dim> {
   void step(State<Dim>& st, const StepContext& ctx) override {
     // The nodal data of the last step are overwritten below: output fields not filled by now stay
     // as they are (a failed step leaves them; a completed one marks them stale again).
-    output_fields_stale_ = false;
+    output_fields_stale_ = water_output_stale_ = false;
     ParticleSet<Dim>& ps = st.solid;
     ParticleSet<Dim>& ws = double_point_ ? st.fluid : st.solid;
     const double dt = ctx.dt;
@@ -292,7 +294,11 @@ class SemiImplicit final : public Formulation<Dim> {
     lap("shape functions");
 
     scatter_soil(ps);                                                                       // (2)
-    if (double_point_) scatter_water_points(ws);
+    nodal_porosity();
+    if (double_point_) {
+      bad = scatter_water_points(ws);
+      if (bad >= 0) st.health.report(bad, "fluid", "water-point porosity outside (0, 1]");
+    }
     for (const auto& ff : face_forces_)  // tractions on the soil (no pore-pressure loads: see loads_)
       for_each_loaded_node(
           grid_, ff, [&](std::size_t i) { return soil_.acc[i].m > transfer::empty_node_mass; },
@@ -324,10 +330,7 @@ class SemiImplicit final : public Formulation<Dim> {
     bad = update_soil(ps, dt);                                                              // (8)
     if (bad >= 0) st.health.report(bad, "solid", "volume ratio J <= 0 or porosity outside (0, 1)");
     fbar_.apply(grid_, box_, schedule_, sd_, dt, st, materials_, material_particles_);  // (9)(b)-(g), transfer/fbar.hpp
-    if (double_point_) {
-      bad = update_water_points(ps, ws, dt);
-      if (bad >= 0) st.health.report(bad, "fluid", "water-point porosity outside (0, 1]");
-    }
+    if (double_point_) update_water_points(ws, dt);
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       if (material_particles_[k].empty() || !materials_[k]) continue;
       const long m_bad = materials_[k]->update_stress(ps, material_particles_[k], dt);
@@ -599,13 +602,43 @@ class SemiImplicit final : public Formulation<Dim> {
     });
   }
 
-  /// (2) Water points (double-point, eqs. 50-51, 56): sum S rho_w V, sum S m v, sum S m (the
-  /// velocity weights of eq. 51), from which the node pass forms M_w and the body force
-  /// n_I (sum S rho_w V) b; the points' extent for the free surface (add_base_extent, add_node_extent).
-  void scatter_water_points(const ParticleSet<Dim>& ws) {
+  /// (2) Nodal porosity and conductivity of the soil, n_I = sum S m n / M_s and k_I = sum S m k /
+  /// M_s (eqs. 46-47; 1 and 0 where no soil), for the water points' P2G, the drag and the
+  /// continuity.
+  void nodal_porosity() {
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      auto& e = node_[i];
+      const double Ms = soil_.acc[i].m;
+      const bool has_s = Ms > transfer::empty_node_mass;
+      e.n = has_s ? e.mn / Ms : 1.0;
+      e.k = has_s ? e.mk / Ms : 0.0;
+    });
+  }
+
+  /// (2) Water points (double-point, eqs. 50-51, 56), in one pass per point:
+  ///   (8h)-(8i) of the previous step: the porosity at the point, n_p = sum S n_I (n_I of this
+  ///   step's soil points, nodal_porosity()), and its volume V = m / (n_p rho_w) (eq. 36:
+  ///   n V = n0 V0);
+  ///   P2G: sum S rho_w V, sum S m v, sum S m (the velocity weights of eq. 51), from which the node
+  ///   pass forms M_w and the body force n_I (sum S rho_w V) b; the points' extent for the free
+  ///   surface (add_base_extent, add_node_extent).
+  /// The seed maps the soil's porosity with the shape functions of the step that updated it
+  /// (step 8h); here the next step's soil P2G maps it, with the points where they now are, and no
+  /// pass of its own (docs/formulations.md, "Water points' porosity"). Returns the first point
+  /// whose porosity is outside (0, 1], or -1.
+  long scatter_water_points(ParticleSet<Dim>& ws) {
     const bool laplace_derived = kCellMoments && moments_->laplace_derived();
+    long bad = transfer::no_particle;
     wschedule_.run([&](int p) {
-      const double V = ws.V[p], m = ws.m[p], rhoV = rho_w_points_[ws.material[p]] * V;
+      double np = 0.0;
+      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const auto&) { np += N * node_[i].n; });
+      if (!(np > 0.0 && np <= 1.0 + 1e-12)) {
+#pragma omp critical(swmpm_water_porosity)
+        bad = std::min(bad, static_cast<long>(p));
+      }
+      const double rho_w = rho_w_points_[ws.material[p]], m = ws.m[p];
+      ws.n[p] = np;
+      const double V = ws.V[p] = m / (np * rho_w), rhoV = rho_w * V;
       const Vec<Dim> mv = m * ws.v[p];
       const Vec<Dim> x_lo = ws.x[p] - ws.l[p], x_hi = ws.x[p] + ws.l[p];
       add_base_extent(sdw_[p], x_lo, x_hi);
@@ -622,6 +655,7 @@ class SemiImplicit final : public Formulation<Dim> {
         add_node_extent(i, N, x_lo, x_hi);
       });
     });
+    return bad == transfer::no_particle ? -1 : bad;
   }
 
   /// (3)-(4) per node, with v^t = M v / M and Q = g n M_w / k (eq. 58), a = dt Q,
@@ -646,8 +680,6 @@ class SemiImplicit final : public Formulation<Dim> {
       auto& w = water_.acc[i];
       auto& e = node_[i];
       const bool has_s = s.m > transfer::empty_node_mass;
-      e.n = has_s ? e.mn / s.m : 1.0;
-      e.k = has_s ? e.mk / s.m : 0.0;
       Vec<Dim> vw = Vec<Dim>::Zero();
       if (double_point_) {
         vw = w.m > transfer::empty_node_mass ? Vec<Dim>(w.mv / w.m) : Vec<Dim>::Zero();
@@ -1050,7 +1082,7 @@ class SemiImplicit final : public Formulation<Dim> {
       return bad;
     };
     const long bad = double_point_ ? update(sdw_) : update(sd_);
-    output_fields_stale_ = double_point_;
+    output_fields_stale_ = water_output_stale_ = double_point_;
     return bad == transfer::no_particle ? -1 : bad;
   }
 
@@ -1058,7 +1090,11 @@ class SemiImplicit final : public Formulation<Dim> {
   /// projected p^t plus the increment, with the step's shape data), and the water velocity v_w^{t+1}
   /// at them, for output and monitors only; the time loop asks for them when it writes
   /// (Formulation::complete_output_fields).
-  void complete_output_fields(State<Dim>& st) override {
+  void complete_output_fields(State<Dim>& st, bool water_points) override {
+    if (water_points && water_output_stale_) {
+      water_output_stale_ = false;
+      complete_water_porosity(st.solid, st.fluid);
+    }
     if (!output_fields_stale_) return;
     output_fields_stale_ = false;
     ParticleSet<Dim>& ps = st.solid;
@@ -1192,38 +1228,51 @@ class SemiImplicit final : public Formulation<Dim> {
     }
   }
 
-  /// (7) and (8h)-(8i) double-point water points, in one pass: FLIP/PIC velocity and position with
-  /// v_w^{t+1}; the nodal porosity from the updated soil points (soil-mass weighted, divided by
-  /// M_s: erratum of step 8h) interpolated at them (1 where no soil), and their volume
-  /// V = m / (n rho_w) (eq. 36: n V = n0 V0). Shape data of the start of the step.
-  long update_water_points(const ParticleSet<Dim>& ps, ParticleSet<Dim>& ws, double dt) {
-    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { node_[i].mn = 0.0; });
-    schedule_.run([&](int p) {
-      const double mn = ps.m[p] * ps.n[p];
-      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) { node_[i].mn += N * mn; });
-    });
-    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
-      const double Ms = soil_.acc[i].m;
-      node_[i].n = Ms > transfer::empty_node_mass ? node_[i].mn / Ms : 1.0;
-    });
+  /// (7) double-point water points: FLIP/PIC velocity and position with v_w^{t+1}, shape data of
+  /// the start of the step. Their porosity and volume (8h)-(8i) follow in the next step's P2G
+  /// (scatter_water_points), or for output in complete_output_fields.
+  void update_water_points(ParticleSet<Dim>& ws, double dt) {
     const long n = static_cast<long>(ws.size());
-    long bad = transfer::no_particle;
-#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       Vec<Dim> vw = Vec<Dim>::Zero(), vw_old = Vec<Dim>::Zero();
-      double np = 0.0;
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const auto&) {
         vw += N * water_.v[i];
         vw_old += N * water_.vL[i];
-        np += N * node_[i].n;
       });
       ws.v[p] = flip_ * (ws.v[p] + vw - vw_old) + (1.0 - flip_) * vw;
       ws.x[p] += dt * vw;
+    }
+  }
+
+  /// Double-point, output only: the water points' porosity and volume where the points are now,
+  /// as the next step's P2G will find them (scatter_water_points): the soil's porosity mapped to
+  /// the nodes with the soil points' current shape functions, n_I = sum S m n / sum S m (1 where
+  /// no soil), interpolated at each water point, V = m / (n rho_w). The soil's sums go in one
+  /// thread in point order (the same numbers with any number of threads); frames are rare.
+  void complete_water_porosity(const ParticleSet<Dim>& ps, ParticleSet<Dim>& ws) {
+    long bad = -1;
+    transfer::evaluate_shapes<Shape>(grid_, ps, out_sd_, bad);
+    transfer::evaluate_shapes<Shape>(grid_, ws, out_sdw_, bad);
+    out_m_.assign(grid_.num_nodes(), 0.0);
+    out_mn_.assign(grid_.num_nodes(), 0.0);
+    for (std::size_t p = 0; p < ps.size(); ++p) {
+      const double m = ps.m[p], mn = m * ps.n[p];
+      shape::for_each_node(grid_, out_sd_[p], [&](std::size_t i, double N, const auto&) {
+        out_m_[i] += N * m;
+        out_mn_[i] += N * mn;
+      });
+    }
+    const long n = static_cast<long>(ws.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      double np = 0.0;
+      shape::for_each_node(grid_, out_sdw_[p], [&](std::size_t i, double N, const auto&) {
+        np += N * (out_m_[i] > transfer::empty_node_mass ? out_mn_[i] / out_m_[i] : 1.0);
+      });
       ws.n[p] = np;
       ws.V[p] = ws.m[p] / (np * rho_w_points_[ws.material[p]]);
-      if (!(np > 0.0 && np <= 1.0 + 1e-12)) bad = std::min(bad, p);
     }
-    return bad == transfer::no_particle ? -1 : bad;
   }
 
   /// solver.escaped_water = remove (double-point): the water points outside the soil leave the
@@ -1317,7 +1366,10 @@ class SemiImplicit final : public Formulation<Dim> {
   NodeBox<Dim> box_;
   std::vector<shape::ShapeData<Dim, S>> sd_;
   std::vector<shape::ShapeData<Dim, S, !kCellMoments>> sdw_;  // weights only with the cell moments
+  std::vector<shape::ShapeData<Dim, S, false>> out_sd_, out_sdw_;  // complete_water_porosity (output only)
+  std::vector<double> out_m_, out_mn_;                               // per node, complete_water_porosity
   bool output_fields_stale_ = false;  // double-point: ps.p and ps.v_f lag the last step (complete_output_fields)
+  bool water_output_stale_ = false;   // double-point: the water points' n and V lag the last step
   std::vector<FaceForce<Dim, S>> face_forces_;
   StripeSchedule schedule_, wschedule_;
   Reorder<Dim> reorder_, wreorder_;
