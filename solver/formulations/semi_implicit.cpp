@@ -209,6 +209,7 @@ class SemiImplicit final : public Formulation<Dim> {
     soil_.resize(nodes);
     water_.resize(nodes);
     node_.assign(nodes, NodeExtra{});
+    if (double_point_) water_sums_.assign(nodes, WaterSums{});
     extent_.assign(nodes, Extent{});
     support_.resize(nodes);
     p_node_.assign(nodes, 0.0);
@@ -458,6 +459,15 @@ class SemiImplicit final : public Formulation<Dim> {
   enum class Remap { none, node, linear };
 
   /// Per-node quantities besides the two phases' momenta and forces.
+  /// Double-point water P2G sums of one node in register pairs (GCC/Clang vector extension):
+  /// {sum S m, sum S rho_w V} and, in 2D, sum S m v; a point adds each pair with one packed
+  /// multiply-add. Copied into water_.acc and node_ after the pass.
+  typedef double Pair __attribute__((vector_size(16)));
+  struct WaterSums {
+    Pair m_raw{0.0, 0.0};
+    Pair mv{0.0, 0.0};
+  };
+
   struct NodeExtra {
     double mn = 0.0;        // sum S m_s n (nodal porosity x M_s, eq. 46)
     double mk = 0.0;        // sum S m_s k (eq. 47)
@@ -646,14 +656,26 @@ class SemiImplicit final : public Formulation<Dim> {
         const Weights c = water_weights(ws, p, laplace_derived);
         moments_->template add<false, true>(grid_, sdw_[p].base, ws.x[p], 0.0, c.w, c.l);
       }
+      const Pair m_rhoV{m, rhoV}, mv_pair{mv[0], mv[1]};
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const auto&) {
-        auto& w = water_.acc[i];
-        w.m += N * m;
-        w.mv += N * mv;
-        auto& e = node_[i];
-        e.w_raw += N * rhoV;
+        WaterSums& w = water_sums_[i];
+        w.m_raw += N * m_rhoV;
+        if constexpr (Dim == 2) w.mv += N * mv_pair;
+        else {
+          auto& a = water_.acc[i];
+          a.mv += N * mv;
+        }
         add_node_extent(i, N, x_lo, x_hi);
       });
+    });
+    // Into the node fields the rest of the step reads (and zero for the next step's points).
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      WaterSums& w = water_sums_[i];
+      auto& a = water_.acc[i];
+      a.m = w.m_raw[0];
+      node_[i].w_raw = w.m_raw[1];
+      if constexpr (Dim == 2) a.mv = Vec<Dim>(w.mv[0], w.mv[1]);
+      w = WaterSums{};
     });
     return bad == transfer::no_particle ? -1 : bad;
   }
@@ -1353,6 +1375,7 @@ class SemiImplicit final : public Formulation<Dim> {
   std::array<double, 6> face_pressure_{};   // Pa, prescribed p on drained faces (0 unless `pressure`)
   NodeFields<Dim> soil_, water_;
   std::vector<NodeExtra> node_;
+  std::vector<WaterSums> water_sums_;  // double-point: zero between steps (scatter_water_points)
   std::vector<Extent> extent_;   // per node: water extent (kBaseExtent: of the points whose support starts there)
   std::vector<double> support_;  // per node: integral of its basis function over the grid
   std::vector<double> p_node_;   // Pa, per node: p^t from the linear projection of the points' pressures
