@@ -92,6 +92,9 @@ class Runner {
         throw std::runtime_error(water.string() + " is missing: a double-point formulation needs water points; "
                                  "run swmpm preprocess again");
       state_.fluid = particles_from_cloud<Dim>(scene::read_vtu(water.string()), water.string());
+      // Semi-implicit water points use neither skeleton nor single-point pore-fluid fields: freed,
+      // so reordering and snapshots do not carry them.
+      if (scene_.formulation == scene::Formulation::semi_implicit_double_point) state_.fluid.make_water_points();
     }
     const fs::path surfaces = dir_ / "particles" / "surfaces.vtu";
     if (!scene::surface_bit_names(scene_).empty()) {

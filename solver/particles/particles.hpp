@@ -70,10 +70,25 @@ struct ParticleSet {
     const std::size_t k = size();
     n.assign(k, 0.0);
     p.assign(k, 0.0);
+    if (water_points_) return;
     m_f.assign(k, 0.0);
     v_f.assign(k, Vec<Dim>::Zero());
     fluid_material.assign(k, 0);
   }
+  /// Double-point water points (semi-implicit): no skeleton and no pore fluid of their own, so F,
+  /// L, sigma, eps_p and the single-point pore-fluid fields m_f, v_f, fluid_material are freed and
+  /// stay empty (resize, add_fluid); reordering and snapshots then skip them. The set keeps n and p.
+  void make_water_points() {
+    water_points_ = true;
+    F.clear();
+    L.clear();
+    sigma.clear();
+    eps_p.clear();
+    m_f.clear();
+    v_f.clear();
+    fluid_material.clear();
+  }
+  bool water_points() const { return water_points_; }
   void resize(std::size_t k) {
     id.resize(k);
     x.resize(k);
@@ -83,10 +98,12 @@ struct ParticleSet {
     m.resize(k);
     V.resize(k);
     V0.resize(k);
-    F.assign(k, Mat3::Identity());
-    L.assign(k, MatD<Dim>::Zero());
-    sigma.assign(k, Sym::Zero());
-    eps_p.assign(k, 0.0);
+    if (!water_points_) {
+      F.assign(k, Mat3::Identity());
+      L.assign(k, MatD<Dim>::Zero());
+      sigma.assign(k, Sym::Zero());
+      eps_p.assign(k, 0.0);
+    }
     material.resize(k);
     body.resize(k);
     faces.resize(k);
@@ -103,6 +120,9 @@ struct ParticleSet {
   /// Bytes held per particle by this set (for run.json and the memory benchmark): the fields every
   /// set has, plus the pore-fluid and model-state fields when allocated.
   std::size_t bytes_per_particle() const {
+    if (water_points_)
+      return sizeof(std::int64_t) + 4 * sizeof(Vec<Dim>) + 3 * sizeof(double) + 2 * sizeof(std::int32_t) +
+             sizeof(std::uint32_t) + (carries_fluid_ ? 2 * sizeof(double) : 0);
     return sizeof(std::int64_t) + 4 * sizeof(Vec<Dim>) + 3 * sizeof(double) + sizeof(Mat3) +
            sizeof(MatD<Dim>) + sizeof(Sym) + sizeof(double) + 2 * sizeof(std::int32_t) +
            sizeof(std::uint32_t) +
@@ -118,12 +138,14 @@ struct ParticleSet {
     state = o.state;
     carries_fluid_ = o.carries_fluid_;
     carries_state_ = o.carries_state_;
+    water_points_ = o.water_points_;
     L.clear();
   }
 
  private:
   bool carries_fluid_ = false;
   bool carries_state_ = false;
+  bool water_points_ = false;  // make_water_points()
 };
 
 /// Reorders a particle set in place: particle k of the result is particle order[k] before.
