@@ -20,6 +20,12 @@ using Vec = Eigen::Matrix<double, Dim, 1>;
 template <int Dim>
 using MatD = Eigen::Matrix<double, Dim, Dim>;
 using Mat3 = Eigen::Matrix3d;
+/// Two doubles in one SIMD register (GCC/Clang vector extension: SSE2, NEON), for hot sums that
+/// add pairs with one packed multiply-add. Element-wise IEEE arithmetic: the same results as two
+/// scalar operations. PairU: the same, 8-byte aligned and may alias double, to load or store a pair
+/// at any double's address.
+typedef double Pair __attribute__((vector_size(16)));
+typedef double PairU __attribute__((vector_size(16), aligned(8), may_alias));
 /// Symmetric tensor in Voigt order xx, yy, zz, xy, yz, xz (ParaView's order for 6-component arrays).
 using Sym = Eigen::Matrix<double, 6, 1>;
 

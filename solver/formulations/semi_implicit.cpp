@@ -458,16 +458,16 @@ class SemiImplicit final : public Formulation<Dim> {
  private:
   enum class Remap { none, node, linear };
 
-  /// Per-node quantities besides the two phases' momenta and forces.
-  /// Double-point water P2G sums of one node in register pairs (GCC/Clang vector extension):
-  /// {sum S m, sum S rho_w V} and, in 2D, sum S m v; a point adds each pair with one packed
-  /// multiply-add. Copied into water_.acc and node_ after the pass.
-  typedef double Pair __attribute__((vector_size(16)));
+  /// Double-point water P2G sums of one node in register pairs: {sum S m, sum S rho_w V} and, in
+  /// 2D, sum S m v (3D: water_.acc's mv), one packed multiply-add each per point and node; copied
+  /// into water_.acc and node_ after the pass. (With sum S m v as an Eigen vector here instead:
+  /// 18 more instructions per point-step, callgrind B4 6².)
   struct WaterSums {
     Pair m_raw{0.0, 0.0};
     Pair mv{0.0, 0.0};
   };
 
+  /// Per-node quantities besides the two phases' momenta and forces.
   struct NodeExtra {
     double mn = 0.0;        // sum S m_s n (nodal porosity x M_s, eq. 46)
     double mk = 0.0;        // sum S m_s k (eq. 47)
@@ -619,10 +619,16 @@ class SemiImplicit final : public Formulation<Dim> {
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       auto& e = node_[i];
       const double Ms = soil_.acc[i].m;
-      const bool has_s = Ms > transfer::empty_node_mass;
-      e.n = has_s ? e.mn / Ms : 1.0;
-      e.k = has_s ? e.mk / Ms : 0.0;
+      e.n = porosity_at_node(e.mn, Ms);
+      e.k = Ms > transfer::empty_node_mass ? e.mk / Ms : 0.0;
     });
+  }
+  /// n_I = sum S m n / M_s of the soil at a node, 1 where there is none (eq. 46, step 8h erratum).
+  static double porosity_at_node(double mn, double Ms) { return Ms > transfer::empty_node_mass ? mn / Ms : 1.0; }
+  /// A water point's porosity n_p and volume V = m / (n_p rho_w) (eq. 36: n V = n0 V0); returns V.
+  double set_water_porosity(ParticleSet<Dim>& ws, std::size_t p, double np) const {
+    ws.n[p] = np;
+    return ws.V[p] = ws.m[p] / (np * rho_w_points_[ws.material[p]]);
   }
 
   /// (2) Water points (double-point, eqs. 50-51, 56), in one pass per point:
@@ -646,9 +652,7 @@ class SemiImplicit final : public Formulation<Dim> {
 #pragma omp critical(swmpm_water_porosity)
         bad = std::min(bad, static_cast<long>(p));
       }
-      const double rho_w = rho_w_points_[ws.material[p]], m = ws.m[p];
-      ws.n[p] = np;
-      const double V = ws.V[p] = m / (np * rho_w), rhoV = rho_w * V;
+      const double m = ws.m[p], rhoV = rho_w_points_[ws.material[p]] * set_water_porosity(ws, p, np);
       const Vec<Dim> mv = m * ws.v[p];
       const Vec<Dim> x_lo = ws.x[p] - ws.l[p], x_hi = ws.x[p] + ws.l[p];
       add_base_extent(sdw_[p], x_lo, x_hi);
@@ -661,10 +665,7 @@ class SemiImplicit final : public Formulation<Dim> {
         WaterSums& w = water_sums_[i];
         w.m_raw += N * m_rhoV;
         if constexpr (Dim == 2) w.mv += N * mv_pair;
-        else {
-          auto& a = water_.acc[i];
-          a.mv += N * mv;
-        }
+        else water_.acc[i].mv += N * mv;
         add_node_extent(i, N, x_lo, x_hi);
       });
     });
@@ -673,8 +674,8 @@ class SemiImplicit final : public Formulation<Dim> {
       WaterSums& w = water_sums_[i];
       auto& a = water_.acc[i];
       a.m = w.m_raw[0];
-      node_[i].w_raw = w.m_raw[1];
       if constexpr (Dim == 2) a.mv = Vec<Dim>(w.mv[0], w.mv[1]);
+      node_[i].w_raw = w.m_raw[1];
       w = WaterSums{};
     });
     return bad == transfer::no_particle ? -1 : bad;
@@ -1290,10 +1291,9 @@ class SemiImplicit final : public Formulation<Dim> {
     for (long p = 0; p < n; ++p) {
       double np = 0.0;
       shape::for_each_node(grid_, out_sdw_[p], [&](std::size_t i, double N, const auto&) {
-        np += N * (out_m_[i] > transfer::empty_node_mass ? out_mn_[i] / out_m_[i] : 1.0);
+        np += N * porosity_at_node(out_mn_[i], out_m_[i]);
       });
-      ws.n[p] = np;
-      ws.V[p] = ws.m[p] / (np * rho_w_points_[ws.material[p]]);
+      set_water_porosity(ws, static_cast<std::size_t>(p), np);
     }
   }
 

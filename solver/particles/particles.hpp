@@ -88,7 +88,6 @@ struct ParticleSet {
     v_f.clear();
     fluid_material.clear();
   }
-  bool water_points() const { return water_points_; }
   void resize(std::size_t k) {
     id.resize(k);
     x.resize(k);

@@ -138,10 +138,6 @@ class CellMoments {
     PairPoly ww, wd, dd;
   };
 
-  /// Two doubles in one SSE/NEON register (GCC/Clang vector extension); Pair8 the same with
-  /// 8-byte alignment, to load and store the moments at any offset.
-  typedef double Pair __attribute__((vector_size(16)));
-  typedef double Pair8 __attribute__((vector_size(16), aligned(8), may_alias));
   /// M[set][m Q + n] += c_set (xi^m eta^n) for m, n < Q, the same products and sums as written
   /// out one by one (bitwise), in pairs of n: the powers of eta are built in registers, and xi^m
   /// times a pair of them is one packed product. (Built one double at a time in a stack array and
@@ -160,7 +156,7 @@ class CellMoments {
         double* R = M + set * QQ + m * Q;
         for (int h = 0; h < H; ++h) {
           const Pair v = px * pair[h];
-          *reinterpret_cast<Pair8*>(R + 2 * h) += c * v;
+          *reinterpret_cast<PairU*>(R + 2 * h) += c * v;
         }
         R[Q - 1] += c * (px * py[Q - 1]);
       };
