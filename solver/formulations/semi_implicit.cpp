@@ -576,7 +576,7 @@ class SemiImplicit final : public Formulation<Dim> {
     const bool sp = !double_point_;
     const bool track_soil_volume = remove_escaped_;  // for remove_escaped_water
     const bool laplace_derived = kCellMoments && moments_->laplace_derived();
-    schedule_.run([&](int p) {
+    schedule_.run([&](int p) __attribute__((always_inline)) {
       const double V = ps.V[p], n = ps.n[p], m = ps.m[p];
       const double n0 = 1.0 - (1.0 - n) * V / ps.V0[p];
       const double k = perm_[ps.material[p]].at(n, n0);
@@ -645,7 +645,7 @@ class SemiImplicit final : public Formulation<Dim> {
   long scatter_water_points(ParticleSet<Dim>& ws) {
     const bool laplace_derived = kCellMoments && moments_->laplace_derived();
     long bad = transfer::no_particle;
-    wschedule_.run([&](int p) {
+    wschedule_.run([&](int p) __attribute__((always_inline)) {
       double np = 0.0;
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const auto&) { np += N * node_[i].n; });
       if (!(np > 0.0 && np <= 1.0 + 1e-12)) {
@@ -1077,36 +1077,58 @@ class SemiImplicit final : public Formulation<Dim> {
   /// `mfvp-linear` the same with the linear projection (reproduces linear fields). Double-point:
   /// the soil points' p^{t+1} (output only) is filled when read, complete_output_fields().
   long update_pressure(ParticleSet<Dim>& ws) {
-    const auto& dp = poisson_.dp();
     if (remap_ == Remap::node) {
       if (double_point_)
         constant_.fit(grid_, box_, wschedule_, sdw_, ws.x, [&](int p) { return ws.m[p]; }, [&](int p) { return ws.p[p]; });
       else
         constant_.fit(grid_, box_, schedule_, sd_, ws.x, [&](int p) { return ws.m_f[p]; }, [&](int p) { return ws.p[p]; });
     }
-    auto new_pressure = [&](const auto& sd, const Vec<Dim>& x, double p_old) {
-      double inc = 0.0;
-      shape::for_each_node(grid_, sd, [&](std::size_t i, double N, const auto&) { inc += N * dp[i]; });
-      switch (remap_) {
-        case Remap::none: return p_old + inc;
-        case Remap::node: return constant_.at_point(grid_, sd, x) + inc;
-        case Remap::linear: return linear_.at_point(grid_, sd, x) + inc;
-      }
-      return p_old + inc;
-    };
-    auto update = [&](const auto& sdw) {
-      const long n = static_cast<long>(ws.size());
-      long bad = transfer::no_particle;
-#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
-      for (long p = 0; p < n; ++p) {
-        ws.p[p] = new_pressure(sdw[p], ws.x[p], ws.p[p]);
-        if (!std::isfinite(ws.p[p])) bad = std::min(bad, p);
-      }
-      return bad;
-    };
-    const long bad = double_point_ ? update(sdw_) : update(sd_);
     output_fields_stale_ = water_output_stale_ = double_point_;
-    return bad == transfer::no_particle ? -1 : bad;
+    // p^{t+1} = remapped p^t at the point + sum S dp, in one visit of its nodes.
+    auto update = [&](const auto& sdw) {
+      return with_remap([&](auto visit, auto remapped) {
+        constexpr bool kRemapped = decltype(remapped)::value;
+        const auto& dp = poisson_.dp();
+        const long n = static_cast<long>(ws.size());
+        long bad = transfer::no_particle;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+        for (long p = 0; p < n; ++p) {
+          double inc = 0.0, value = 0.0;
+          visit(sdw[p], ws.x[p], [&](std::size_t i, double N, double pbar) {
+            inc += N * dp[i];
+            if constexpr (kRemapped) value += N * pbar;
+          });
+          ws.p[p] = (kRemapped ? value : ws.p[p]) + inc;
+          if (!std::isfinite(ws.p[p])) bad = std::min(bad, p);
+        }
+        return bad == transfer::no_particle ? -1 : bad;
+      });
+    };
+    return double_point_ ? update(sdw_) : update(sd_);
+  }
+  /// Calls body(visit, remapped) with the remap's visitor: visit(sd, x, fn) calls fn(i, N, pbar_I)
+  /// at each node of a point (for_each_node's order), pbar_I the nodal term of the remapped
+  /// p^t at the point (NodeProjection::for_each_node_value; 0 without remap: remapped is
+  /// std::false_type, p^t stays the point's own). One visit gathers the increment too.
+  template <class Body>
+  auto with_remap(Body&& body) const {
+    switch (remap_) {
+      case Remap::node:
+        return body([&](const auto& sd, const Vec<Dim>& x, auto&& fn)
+                        __attribute__((always_inline)) { constant_.for_each_node_value(grid_, sd, x, fn); },
+                    std::true_type{});
+      case Remap::linear:
+        return body([&](const auto& sd, const Vec<Dim>& x, auto&& fn)
+                        __attribute__((always_inline)) { linear_.for_each_node_value(grid_, sd, x, fn); },
+                    std::true_type{});
+      case Remap::none:
+        break;
+    }
+    return body(
+        [&](const auto& sd, const Vec<Dim>&, auto&& fn) __attribute__((always_inline)) {
+          shape::for_each_node(grid_, sd, [&](std::size_t i, double N, const auto&) { fn(i, N, 0.0); });
+        },
+        std::false_type{});
   }
 
   /// Double-point: the soil points' pore pressure, p^{t+1} interpolated from the nodes (the
@@ -1145,7 +1167,7 @@ class SemiImplicit final : public Formulation<Dim> {
   /// velocity at them is filled for output (complete_output_fields).
   template <bool kPoreWater>
   void gather_soil(ParticleSet<Dim>& ps, double dt) {
-    schedule_.run([&](int p) {
+    schedule_.run([&](int p) __attribute__((always_inline)) {
       Vec<Dim> vs = Vec<Dim>::Zero(), vs_old = Vec<Dim>::Zero(), vw = Vec<Dim>::Zero(), vw_old = Vec<Dim>::Zero();
       shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
         vs += N * soil_.v[i];

@@ -18,7 +18,13 @@
 
 #include <algorithm>
 #include <cmath>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
+#include <type_traits>
+
+#include "solver/common.hpp"
 #include "solver/grid/grid.hpp"
 
 namespace swmpm::shape {
@@ -309,20 +315,77 @@ inline void for_each_row(const Grid<Dim>& g, const ShapeData<Dim, S, G>& sd, Fn&
   }
 }
 
+/// Axis a of a particle's shape data: the coordinate x_a with half-size l_a (weights-only data:
+/// the weights only).
+template <class Shape, int Dim, bool kGradients>
+[[gnu::always_inline]] inline void evaluate_axis(const Grid<Dim>& g, int a, double x_a, double l_a,
+                                                 ShapeData<Dim, Shape::support, kGradients>& sd) {
+  if constexpr (kGradients) {
+    Shape::eval(g.axis(a), x_a, l_a, sd.base[a], sd.w[a], sd.dw[a]);
+  } else {
+    double unused[Shape::support];  // dead stores once eval is inlined
+    Shape::eval(g.axis(a), x_a, l_a, sd.base[a], sd.w[a], unused);
+  }
+}
+
 /// Evaluates the shape data of a particle at x with half-sizes l_p (weights-only data: the
 /// weights only).
 template <class Shape, int Dim, bool kGradients>
 inline void evaluate(const Grid<Dim>& g, const Vec<Dim>& x, const Vec<Dim>& l_p,
                      ShapeData<Dim, Shape::support, kGradients>& sd) {
 #pragma GCC unroll 3
-  for (int a = 0; a < Dim; ++a) {
-    if constexpr (kGradients) {
-      Shape::eval(g.axis(a), x[a], l_p[a], sd.base[a], sd.w[a], sd.dw[a]);
-    } else {
-      double unused[Shape::support];  // dead stores once eval is inlined
-      Shape::eval(g.axis(a), x[a], l_p[a], sd.base[a], sd.w[a], unused);
-    }
-  }
+  for (int a = 0; a < Dim; ++a) evaluate_axis<Shape>(g, a, x[a], l_p[a], sd);
 }
+
+#if defined(__SSE2__)
+/// Quadratic B-splines in 2D, both axes of a point at once in register pairs (SSE2), for the
+/// points inside the grid whose cells are uniform on both axes (cells 1 .. n - 2, the closed form
+/// of BSpline<2>::eval): the same operations in the same order as eval(), lane by lane, so the
+/// same shape data bit for bit (tests/unit/test_shape.cpp), with one packed division where eval()
+/// does one per axis (two with gradients). The grid's constants are packed once per pass.
+/// cell_of's truncation and its correction are the packed cvttpd2dq and compare.
+class BSpline2Pairs {
+ public:
+  explicit BSpline2Pairs(const Grid<2>& g)
+      : origin_(_mm_set_pd(g.axis(1).origin, g.axis(0).origin)),
+        h_(_mm_set_pd(g.axis(1).h, g.axis(0).h)),
+        last_uniform_(_mm_set_pd(g.axis(1).cells - 2.0, g.axis(0).cells - 2.0)),
+        gmin_(_mm_set_pd(g.min()[1], g.min()[0])),
+        gmax_(_mm_set_pd(g.max()[1], g.max()[0])) {
+    const Pair inv_h = 1.0 / Pair(h_);
+    inv_h_ = inv_h;
+  }
+  /// Writes sd (base and weights, and gradients if it has them) and the cells (base as doubles)
+  /// of a point at x and returns true; false, with nothing written, for a point outside the grid
+  /// (or not finite) or in a cell next to a clamped end.
+  template <bool kGradients>
+  [[gnu::always_inline]] bool operator()(const double* x, ShapeData<2, 3, kGradients>& sd, __m128d& cell) const {
+    const __m128d xv = _mm_loadu_pd(x);
+    if (_mm_movemask_pd(_mm_and_pd(_mm_cmpge_pd(xv, gmin_), _mm_cmple_pd(xv, gmax_))) != 3) return false;
+    const __m128d u = _mm_div_pd(_mm_sub_pd(xv, origin_), h_);
+    __m128d c = _mm_cvtepi32_pd(_mm_cvttpd_epi32(u));
+    c = _mm_sub_pd(c, _mm_and_pd(_mm_cmplt_pd(u, c), _mm_set1_pd(1.0)));  // floor: c -= u < c
+    if (_mm_movemask_pd(_mm_and_pd(_mm_cmpge_pd(c, _mm_set1_pd(1.0)), _mm_cmple_pd(c, last_uniform_))) != 3)
+      return false;
+    cell = c;
+    sd.base[0] = static_cast<int>(c[0]);
+    sd.base[1] = static_cast<int>(c[1]);
+    const Pair xi = u - c, r = 1.0 - xi;
+    const Pair w0 = 0.5 * r * r, w1 = 0.5 + xi * r, w2 = 0.5 * xi * xi;
+    sd.w[0][0] = w0[0], sd.w[0][1] = w1[0], sd.w[0][2] = w2[0];
+    sd.w[1][0] = w0[1], sd.w[1][1] = w1[1], sd.w[1][2] = w2[1];
+    if constexpr (kGradients) {
+      const Pair d0 = -r * inv_h_, d1 = (r - xi) * inv_h_, d2 = xi * inv_h_;
+      sd.dw[0][0] = d0[0], sd.dw[0][1] = d1[0], sd.dw[0][2] = d2[0];
+      sd.dw[1][0] = d0[1], sd.dw[1][1] = d1[1], sd.dw[1][2] = d2[1];
+    }
+    return true;
+  }
+
+ private:
+  __m128d origin_, h_, last_uniform_, gmin_, gmax_;
+  Pair inv_h_;  // 1/h per axis, as eval() computes it
+};
+#endif
 
 }  // namespace swmpm::shape

@@ -22,6 +22,9 @@
 #pragma once
 
 #include <omp.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -61,6 +64,10 @@ class CellMoments {
   };
 
   explicit CellMoments(const Grid<2>& g) : nn_(g.nodes_per_axis()) {
+#if defined(__SSE2__)
+    origin_ = _mm_set_pd(g.axis(1).origin, g.axis(0).origin);
+    h_ = _mm_set_pd(g.axis(1).h, g.axis(0).h);
+#endif
     for (int a = 0; a < 2; ++a) build_axis(g.axis(a), tables_[a]);
     moments_.assign(static_cast<std::size_t>(nn_[0]) * nn_[1] * 3 * QQ, 0.0);
   }
@@ -81,16 +88,28 @@ class CellMoments {
   /// D^s (cs, m^3 in 2D per metre), D^w (cw) and L (cl, ignored after derive_laplace()). Sets
   /// whose flag is off are skipped.
   template <bool kSoil, bool kWater>
-  [[gnu::always_inline]] void add(const Grid<2>& g, const std::array<int, 2>& base, const Vec<2>& x, double cs,
+  [[gnu::always_inline]] void add([[maybe_unused]] const Grid<2>& g, const std::array<int, 2>& base, const Vec<2>& x, double cs,
                                   double cw, double cl) {
-    const Axis& ax = g.axis(0);
-    const Axis& ay = g.axis(1);
-    // Local coordinates in the cell. A point outside the grid (or not finite) has shape data
-    // clamped to the grid (transfer::evaluate_shapes reports it): clamp it the same way, so the
-    // operators stay what the clamped weights give and the run stops with "left the grid".
-    auto local = [](double u) { return std::isfinite(u) ? std::clamp(u, 0.0, 1.0) : 0.0; };
-    const double xi = local((x[0] - ax.origin) / ax.h - base[0]);
-    const double eta = local((x[1] - ay.origin) / ay.h - base[1]);
+    // Local coordinates in the cell, (x - origin) / h - base per axis. A point outside the grid
+    // (or not finite) has shape data clamped to the grid (transfer::evaluate_shapes reports it):
+    // clamp it the same way, so the operators stay what the clamped weights give and the run
+    // stops with "left the grid". Per axis isfinite(u) ? clamp(u, 0, 1) : 0; with SSE2 both axes
+    // in one register pair, lane by lane the same values (max(u, 0) is 0 for a NaN u, and the
+    // finite mask zeroes +-inf).
+    double xi, eta;
+#if defined(__SSE2__)
+    const __m128d u = _mm_sub_pd(_mm_div_pd(_mm_sub_pd(_mm_loadu_pd(x.data()), origin_), h_),
+                                 _mm_cvtepi32_pd(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(base.data()))));
+    const __m128d finite = _mm_cmpeq_pd(_mm_sub_pd(u, u), _mm_setzero_pd());
+    const __m128d local =
+        _mm_and_pd(_mm_min_pd(_mm_max_pd(u, _mm_setzero_pd()), _mm_set1_pd(1.0)), finite);
+    xi = _mm_cvtsd_f64(local);
+    eta = _mm_cvtsd_f64(_mm_unpackhi_pd(local, local));
+#else
+    auto clamp01 = [](double u) { return std::isfinite(u) ? std::clamp(u, 0.0, 1.0) : 0.0; };
+    xi = clamp01((x[0] - g.axis(0).origin) / g.axis(0).h - base[0]);
+    eta = clamp01((x[1] - g.axis(1).origin) / g.axis(1).h - base[1]);
+#endif
     double* M = moments_.data() + cell_index(base) * 3 * QQ;
     if (laplace_from_sets_) add_products<kSoil, kWater, false>(M, xi, eta, cs, cw, cl);
     else add_products<kSoil, kWater, true>(M, xi, eta, cs, cw, cl);
@@ -248,6 +267,9 @@ class CellMoments {
   }
 
   std::array<int, 2> nn_;
+#if defined(__SSE2__)
+  __m128d origin_, h_;  // per axis (add)
+#endif
   std::array<std::vector<AxisCell>, 2> tables_;
   std::vector<double> moments_;  // per cell (indexed by its first node): soil, water, L sets of QQ
 };

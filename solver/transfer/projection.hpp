@@ -157,6 +157,15 @@ class NodeProjection {
   template <bool G>
   double at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S, G>& sd, const Vec<Dim>& x) const {
     double value = 0.0;
+    for_each_node_value(g, sd, x, [&](std::size_t, double N, double qa) { value += N * qa; });
+    return value;
+  }
+  /// The terms of at_point, fn(node, N_Ip, Q(x_p - x_I) . a_I), over a point's nodes in
+  /// for_each_node's order (and with its N_Ip): a pass that gathers other nodal fields at the
+  /// point too visits its nodes once.
+  template <bool G, class Fn>
+  [[gnu::always_inline]] void for_each_node_value(const Grid<Dim>& g, const shape::ShapeData<Dim, S, G>& sd,
+                                                  const Vec<Dim>& x, Fn&& fn) const {
     for_each_node_offset(g, sd, x, [&](std::size_t i, double N, double d0, double d1, double d2) {
       const double* a = blocks_.data() + i * NB + NH;  // Q . a_I, Q = (1, d)
       double qa = a[0];
@@ -165,9 +174,8 @@ class NodeProjection {
         qa += d1 * a[2];
         if constexpr (Dim == 3) qa += d2 * a[3];
       }
-      value += N * qa;
+      fn(i, N, qa);
     });
-    return value;
   }
 
  private:

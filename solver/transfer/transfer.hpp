@@ -5,7 +5,10 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include "solver/grid/grid.hpp"
@@ -18,6 +21,70 @@ namespace swmpm::transfer {
 constexpr double empty_node_mass = 1e-14;  // kg; nodes lighter than this carry no velocity
 constexpr long no_particle = std::numeric_limits<long>::max();
 
+/// One point's shape data at x with half-sizes l: a point outside [gmin, gmax] (the grid) or with
+/// a non-finite coordinate gets the shape data of x clamped to the grid (NaN and -inf to gmin,
+/// +inf to gmax), and false.
+template <class Shape, int Dim, bool kGradients>
+[[gnu::always_inline]] inline bool evaluate_point(const Grid<Dim>& g, const Vec<Dim>& gmin, const Vec<Dim>& gmax,
+                                                  const Vec<Dim>& x, const Vec<Dim>& l,
+                                                  shape::ShapeData<Dim, Shape::support, kGradients>& sd) {
+  bool inside = true;
+#pragma GCC unroll 3
+  for (int a = 0; a < Dim; ++a) inside &= x[a] >= gmin[a] && x[a] <= gmax[a];  // false for NaN
+  if (inside) [[likely]] {
+    shape::evaluate<Shape>(g, x, l, sd);
+    return true;
+  }
+  Vec<Dim> xc;
+  for (int a = 0; a < Dim; ++a) xc[a] = x[a] >= gmin[a] ? (x[a] <= gmax[a] ? x[a] : gmax[a]) : gmin[a];
+  shape::evaluate<Shape>(g, xc, l, sd);
+  return false;
+}
+
+#if defined(__SSE2__)
+/// evaluate_shapes for quadratic B-splines in 2D: both axes of a point at once
+/// (shape::BSpline2Pairs), the same data bit for bit; the cells' range as doubles, one packed min
+/// and max per point. Points next to a clamped end or outside the grid take evaluate_point.
+template <bool kGradients>
+NodeBox<2> evaluate_bspline2_pairs(const Grid<2>& g, const ParticleSet<2>& ps,
+                                   std::vector<shape::ShapeData<2, 3, kGradients>>& sd, long& bad) {
+  const long n = static_cast<long>(ps.size());
+  sd.resize(ps.size());
+  NodeBox<2> box;
+  box.lo.fill(std::numeric_limits<int>::max());
+  box.hi.fill(std::numeric_limits<int>::min());
+  const Vec<2> gmin = g.min(), gmax = g.max();
+  const shape::BSpline2Pairs pairs(g);
+  long first_bad = no_particle;
+#pragma omp parallel if (n > parallel_threshold)
+  {
+    __m128d clo = _mm_set1_pd(std::numeric_limits<double>::infinity()), chi = -clo;
+    long tbad = no_particle;
+#pragma omp for schedule(static) nowait
+    for (long p = 0; p < n; ++p) {
+      __m128d c;
+      if (!pairs(ps.x[p].data(), sd[p], c)) [[unlikely]] {
+        if (!evaluate_point<shape::BSpline<2>>(g, gmin, gmax, ps.x[p], ps.l[p], sd[p])) tbad = std::min(tbad, p);
+        c = _mm_set_pd(sd[p].base[1], sd[p].base[0]);
+      }
+      clo = _mm_min_pd(clo, c);
+      chi = _mm_max_pd(chi, c);
+    }
+#pragma omp critical
+    {
+      if (_mm_movemask_pd(_mm_cmple_pd(clo, chi)) == 3)  // this thread had points
+        for (int a = 0; a < 2; ++a) {
+          box.lo[a] = std::min(box.lo[a], static_cast<int>(clo[a]));
+          box.hi[a] = std::max(box.hi[a], static_cast<int>(chi[a]) + 2);
+        }
+      first_bad = std::min(first_bad, tbad);
+    }
+  }
+  bad = first_bad == no_particle ? -1 : first_bad;
+  return box;
+}
+#endif
+
 /// Evaluates every particle's shape data and returns the active node box (the nodes any particle
 /// touches). Particles outside [grid.min, grid.max] or with non-finite positions are reported
 /// through `bad` (smallest index) and get clamped shape data so the step can finish.
@@ -25,6 +92,9 @@ constexpr long no_particle = std::numeric_limits<long>::max();
 template <class Shape, int Dim, bool kGradients>
 NodeBox<Dim> evaluate_shapes(const Grid<Dim>& g, const ParticleSet<Dim>& ps,
                              std::vector<shape::ShapeData<Dim, Shape::support, kGradients>>& sd, long& bad) {
+#if defined(__SSE2__)
+  if constexpr (Dim == 2 && std::is_same_v<Shape, shape::BSpline<2>>) return evaluate_bspline2_pairs(g, ps, sd, bad);
+#endif
   constexpr int S = Shape::support;
   const long n = static_cast<long>(ps.size());
   sd.resize(ps.size());
@@ -39,13 +109,8 @@ NodeBox<Dim> evaluate_shapes(const Grid<Dim>& g, const ParticleSet<Dim>& ps,
     long tbad = no_particle;
 #pragma omp for schedule(static) nowait
     for (long p = 0; p < n; ++p) {
-      Vec<Dim> x = ps.x[p];
-      const bool inside = ((x - gmin).array() >= 0.0).all() && ((gmax - x).array() >= 0.0).all();
-      if (!inside) {  // includes NaN
+      if (!evaluate_point<Shape>(g, gmin, gmax, ps.x[p], ps.l[p], sd[p])) [[unlikely]]
         tbad = std::min(tbad, p);
-        for (int a = 0; a < Dim; ++a) x[a] = std::isfinite(x[a]) ? std::clamp(x[a], gmin[a], gmax[a]) : gmin[a];
-      }
-      shape::evaluate<Shape>(g, x, ps.l[p], sd[p]);
       for (int a = 0; a < Dim; ++a) {
         tlo[a] = std::min(tlo[a], sd[p].base[a]);
         thi[a] = std::max(thi[a], sd[p].base[a] + S - 1);

@@ -4,8 +4,11 @@
 
 #include <random>
 
+#include <cstring>
+
 #include "solver/loads.hpp"
 #include "solver/shape/shape.hpp"
+#include "solver/transfer/transfer.hpp"
 
 using namespace swmpm;
 
@@ -220,6 +223,52 @@ TEST(ShapeFunctions, QuadraticBSplineOnShortAxesMatchesTheRecursion) {
     }
     EXPECT_GT(tested, 80 * cells);
   }
+}
+
+/// transfer::evaluate_shapes takes quadratic B-splines in 2D through shape::BSpline2Pairs (both
+/// axes in register pairs) where it can: its shape data must be the per-axis evaluation's bit for
+/// bit, and its node box and first point off the grid the same, for points in every cell (the
+/// clamped end cells take the per-axis path), on cell faces, on the grid's faces and corners, and
+/// outside it (also not finite).
+template <bool kGradients>
+void check_packed_bspline2() {
+  const Grid<2> g(Vec<2>(-1.3, 0.7), Vec<2>(4.2, 3.1), 0.25, 2, true);  // 22 x 10 cells
+  ParticleSet<2> ps;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> ux(-1.3, 4.2), uy(0.7, 3.1);
+  std::vector<Vec<2>> xs;
+  for (int k = 0; k < 4000; ++k) xs.emplace_back(ux(rng), uy(rng));
+  for (int i = 0; i <= 22; ++i)  // cell faces and grid faces, corners included
+    for (int j = 0; j <= 10; ++j) xs.emplace_back(-1.3 + 0.25 * i, 0.7 + 0.25 * j);
+  const int first_out = static_cast<int>(xs.size());
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  for (const Vec<2>& x : {Vec<2>(-1.4, 1.0), Vec<2>(1.0, 3.2), Vec<2>(nan, 1.0), Vec<2>(inf, 1.0), Vec<2>(1.0, -inf)})
+    xs.push_back(x);
+  ps.resize(xs.size());
+  for (std::size_t p = 0; p < xs.size(); ++p) ps.x[p] = xs[p], ps.l[p] = Vec<2>::Constant(0.0625);
+  std::vector<shape::ShapeData<2, 3, kGradients>> sd;
+  long bad = -2;
+  const NodeBox<2> box = transfer::evaluate_shapes<shape::BSpline2>(g, ps, sd, bad);
+  EXPECT_EQ(bad, first_out);
+  std::array<int, 2> lo{1 << 30, 1 << 30}, hi{-1, -1};
+  int interior = 0;
+  const Vec<2> gmin = g.min(), gmax = g.max();
+  for (std::size_t p = 0; p < xs.size(); ++p) {
+    Vec<2> x = xs[p];
+    for (int a = 0; a < 2; ++a) x[a] = x[a] >= gmin[a] ? (x[a] <= gmax[a] ? x[a] : gmax[a]) : gmin[a];
+    shape::ShapeData<2, 3, kGradients> ref;
+    for (int a = 0; a < 2; ++a) shape::evaluate_axis<shape::BSpline2>(g, a, x[a], 0.0625, ref);
+    ASSERT_EQ(std::memcmp(&ref, &sd[p], sizeof ref), 0) << "point " << p << " at " << xs[p].transpose();
+    for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], ref.base[a]), hi[a] = std::max(hi[a], ref.base[a] + 2);
+    interior += ref.base[0] >= 1 && ref.base[0] <= 20 && ref.base[1] >= 1 && ref.base[1] <= 8;
+  }
+  EXPECT_EQ(box.lo, lo);
+  EXPECT_EQ(box.hi, hi);
+  EXPECT_GT(interior, 2500);  // the packed path was taken
+}
+TEST(ShapeFunctions, PackedQuadraticBSplinesAreThePerAxisOnesBitForBit) {
+  check_packed_bspline2<true>();
+  check_packed_bspline2<false>();
 }
 
 /// A face force goes to the face point's nodes that carry mass, scaled so that the shares still
