@@ -22,8 +22,6 @@
 #include <emmintrin.h>
 #endif
 
-#include <type_traits>
-
 #include "solver/common.hpp"
 #include "solver/grid/grid.hpp"
 
@@ -351,10 +349,8 @@ class BSpline2Pairs {
         h_(_mm_set_pd(g.axis(1).h, g.axis(0).h)),
         last_uniform_(_mm_set_pd(g.axis(1).cells - 2.0, g.axis(0).cells - 2.0)),
         gmin_(_mm_set_pd(g.min()[1], g.min()[0])),
-        gmax_(_mm_set_pd(g.max()[1], g.max()[0])) {
-    const Pair inv_h = 1.0 / Pair(h_);
-    inv_h_ = inv_h;
-  }
+        gmax_(_mm_set_pd(g.max()[1], g.max()[0])),
+        inv_h_(1.0 / Pair(h_)) {}
   /// Writes sd (base and weights, and gradients if it has them) and the cells (base as doubles)
   /// of a point at x and returns true; false, with nothing written, for a point outside the grid
   /// (or not finite) or in a cell next to a clamped end.

@@ -22,8 +22,8 @@ constexpr double empty_node_mass = 1e-14;  // kg; nodes lighter than this carry 
 constexpr long no_particle = std::numeric_limits<long>::max();
 
 /// One point's shape data at x with half-sizes l: a point outside [gmin, gmax] (the grid) or with
-/// a non-finite coordinate gets the shape data of x clamped to the grid (NaN and -inf to gmin,
-/// +inf to gmax), and false.
+/// a non-finite coordinate gets the shape data of x clamped to the grid (a non-finite coordinate
+/// to gmin, as CellMoments::add takes it), and false.
 template <class Shape, int Dim, bool kGradients>
 [[gnu::always_inline]] inline bool evaluate_point(const Grid<Dim>& g, const Vec<Dim>& gmin, const Vec<Dim>& gmax,
                                                   const Vec<Dim>& x, const Vec<Dim>& l,
@@ -36,7 +36,7 @@ template <class Shape, int Dim, bool kGradients>
     return true;
   }
   Vec<Dim> xc;
-  for (int a = 0; a < Dim; ++a) xc[a] = x[a] >= gmin[a] ? (x[a] <= gmax[a] ? x[a] : gmax[a]) : gmin[a];
+  for (int a = 0; a < Dim; ++a) xc[a] = std::isfinite(x[a]) ? std::clamp(x[a], gmin[a], gmax[a]) : gmin[a];
   shape::evaluate<Shape>(g, xc, l, sd);
   return false;
 }

@@ -4,6 +4,8 @@
 
 #include <random>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "solver/loads.hpp"
@@ -255,7 +257,7 @@ void check_packed_bspline2() {
   const Vec<2> gmin = g.min(), gmax = g.max();
   for (std::size_t p = 0; p < xs.size(); ++p) {
     Vec<2> x = xs[p];
-    for (int a = 0; a < 2; ++a) x[a] = x[a] >= gmin[a] ? (x[a] <= gmax[a] ? x[a] : gmax[a]) : gmin[a];
+    for (int a = 0; a < 2; ++a) x[a] = std::isfinite(x[a]) ? std::clamp(x[a], gmin[a], gmax[a]) : gmin[a];
     shape::ShapeData<2, 3, kGradients> ref;
     for (int a = 0; a < 2; ++a) shape::evaluate_axis<shape::BSpline2>(g, a, x[a], 0.0625, ref);
     ASSERT_EQ(std::memcmp(&ref, &sd[p], sizeof ref), 0) << "point " << p << " at " << xs[p].transpose();
