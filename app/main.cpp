@@ -13,6 +13,7 @@
 
 #include "postprocess/postprocess.hpp"
 #include "preprocess/preprocess.hpp"
+#include "scene/files.hpp"
 #include "scene/scene.hpp"
 #include "solver/element.hpp"
 #include "solver/run.hpp"
@@ -272,13 +273,22 @@ int main(int argc, char** argv) {
   auto* pre = app.add_subcommand("preprocess", "Seed particles from the scene's geometry into RUN_DIR");
   pre->add_option("scene", scene_path, "Scene file (JSON)")->required();
   pre->add_option("-o,--output", out_dir, "Run directory (default runs/<scene name>)");
+  swmpm::pre::PreprocessOptions pre_opt;
+  auto run_dir_flags = [&pre_opt](CLI::App* sub) {
+    sub->add_flag("--overwrite", pre_opt.overwrite,
+                  "Replace an earlier run in the run directory (only the files swmpm wrote there are removed)");
+    sub->add_flag("--trust-geometry", pre_opt.trust_geometry,
+                  "Mesh .geo scripts as they are; by default one that could run commands, write files or read "
+                  "files outside the scene's and its own folder is refused");
+  };
+  run_dir_flags(pre);
 
   auto* solve = app.add_subcommand("solve", "Run the scene's formulation in RUN_DIR");
   solve->add_option("run_dir", run_dir, "Run directory written by preprocess")->required();
   solve->add_option("--threads", threads, "OpenMP threads (default: all cores); results do not depend on it")
       ->check(CLI::NonNegativeNumber);
   bool resume = false;
-  solve->add_flag("--resume", resume, "Continue from the last frame (not implemented yet)");
+  solve->add_flag("--resume", resume, "Continue from the last checkpoint (not implemented yet)");
 
   auto* post = app.add_subcommand("postprocess", "Histories, profiles, comparisons, plots, reports");
   post->add_option("run_dir", run_dir, "Run directory")->required();
@@ -288,6 +298,7 @@ int main(int argc, char** argv) {
   run->add_option("scene", scene_path, "Scene file (JSON)")->required();
   run->add_option("-o,--output", out_dir, "Run directory (default runs/<scene name>)");
   run->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  run_dir_flags(run);
 
   auto* element = app.add_subcommand("element", "Drive one material point of a scene's material (calibration, checks)");
   ElementArgs el;
@@ -311,8 +322,9 @@ int main(int argc, char** argv) {
 
   CLI11_PARSE(app, argc, argv);
   try {
+    pre_opt.quiet = quiet;
     if (*pre) {
-      swmpm::pre::preprocess(scene_path, out_dir, quiet);
+      swmpm::pre::preprocess(scene_path, out_dir, pre_opt);
       return 0;
     }
     if (*solve) {
@@ -324,7 +336,7 @@ int main(int argc, char** argv) {
     }
     if (*post) return postprocess_command(run_dir, post_args, quiet);
     if (*run) {
-      const std::string dir = swmpm::pre::preprocess(scene_path, out_dir, quiet);
+      const std::string dir = swmpm::pre::preprocess(scene_path, out_dir, pre_opt);
       const int rc = swmpm::solve(dir, {threads, quiet});
       if (rc != 0) return rc;
       return postprocess_command(dir, {}, quiet);
@@ -333,6 +345,12 @@ int main(int argc, char** argv) {
   } catch (const swmpm::scene::SceneError& e) {
     for (const auto& line : e.lines()) std::cerr << line << "\n";
     return 2;
+  } catch (const swmpm::files::RunDirectoryError& e) {
+    std::cerr << "swmpm: " << e.what() << "\n";
+    return 2;
+  } catch (const swmpm::files::WriteError& e) {
+    std::cerr << "swmpm: " << e.what() << "\n";
+    return 5;
   } catch (const std::exception& e) {
     std::cerr << "swmpm: " << e.what() << "\n";
     return 1;

@@ -97,7 +97,7 @@ def run(swmpm, sc, threads, work):
     with open(path, "w") as f:
         json.dump(sc, f)
     rd = os.path.join(work, sc["name"])
-    subprocess.run([swmpm, "-q", "preprocess", path, "-o", rd], check=True)
+    subprocess.run([swmpm, "-q", "preprocess", path, "-o", rd, "--overwrite"], check=True)
     subprocess.run([swmpm, "-q", "solve", rd, "--threads", str(threads)], check=True)
     with open(os.path.join(rd, "run.json")) as f:
         return json.load(f)

@@ -49,7 +49,7 @@ def prepare(swmpm, s, workdir):
     with open(path, "w") as f:
         json.dump(s, f)
     out = os.path.join(workdir, s["name"])
-    subprocess.run([swmpm, "preprocess", path, "-o", out, "-q"], check=True)
+    subprocess.run([swmpm, "preprocess", path, "-o", out, "-q", "--overwrite"], check=True)
     return out
 
 

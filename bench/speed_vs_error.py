@@ -95,7 +95,7 @@ def run_case(a, base, shape, h, ppc, step, work):
     with open(path, "w") as f:
         json.dump(s, f, indent=1)
     rd = os.path.join(work, name)
-    subprocess.run([a.swmpm, "-q", "preprocess", path, "-o", rd], check=True)
+    subprocess.run([a.swmpm, "-q", "preprocess", path, "-o", rd, "--overwrite"], check=True)
     # A diverged run (exit 3) still writes run.json; its status is reported and the row skipped.
     # A run longer than --max-wall seconds is stopped and reported the same way.
     try:

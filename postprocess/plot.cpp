@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "postprocess/format.hpp"
+#include "scene/files.hpp"
 #include "postprocess/postprocess.hpp"
 
 namespace fs = std::filesystem;
@@ -51,15 +53,31 @@ std::string quoted(const std::string& s) {
   return out + "'";
 }
 
-/// Runs gnuplot on `script`; throws with gnuplot's first error line unless `png` was written.
+void gnuplot(const std::string& script, const fs::path& png, const std::string& temporary, const TempDir& tmp);
+
+/// The line of a script that names its PNG; run_gnuplot puts the file's temporary name in.
+constexpr const char* kSetOutput = "set output @OUTPUT@\n";
+
+/// Runs gnuplot on `script` (which holds kSetOutput) and replaces `png` with what it drew
+/// (files::write_atomically); throws with gnuplot's first error line unless the PNG was written.
 void run_gnuplot(const std::string& script, const fs::path& png, const TempDir& tmp) {
+  std::string text = script;
+  const std::size_t at = text.find(kSetOutput);
+  if (at == std::string::npos) throw std::logic_error("run_gnuplot: the script sets no output");
+  files::write_atomically(png, [&](const std::string& temporary) {
+    text.replace(at, std::strlen(kSetOutput), "set output " + quoted(temporary) + "\n");
+    gnuplot(text, png, temporary, tmp);
+  });
+}
+
+void gnuplot(const std::string& script, const fs::path& png, const std::string& temporary, const TempDir& tmp) {
   const fs::path log = tmp / "gnuplot.log";
   FILE* pipe = popen(("gnuplot > " + log.string() + " 2>&1").c_str(), "w");
   if (pipe == nullptr) throw std::runtime_error("cannot start gnuplot (apt-get install gnuplot-nox)");
   std::fputs(script.c_str(), pipe);
   const int rc = pclose(pipe);
   std::error_code ec;
-  if (rc == 0 && fs::exists(png) && fs::file_size(png, ec) > 0) return;
+  if (rc == 0 && fs::file_size(temporary, ec) > 0 && !ec) return;
   std::ifstream in(log);
   std::string line, first;
   while (std::getline(in, line))
@@ -140,14 +158,15 @@ std::vector<std::string> plot_monitors(const std::string& run_dir, const std::ve
   std::vector<const std::vector<double>*> cols;
   for (const auto& c : t.columns) cols.push_back(&c);
   write_columns(run_data, cols);
-  fs::create_directories(dir / "plots");
+  files::RunDirectory run(dir);
   std::vector<std::string> written;
   for (const auto& [monitor, panel_cols] : groups) {
+    run.claim("plots/" + monitor + ".png");  // never over a file swmpm did not write
     const fs::path png = dir / "plots" / (monitor + ".png");
     const int rows = static_cast<int>(panel_cols.size());
     std::ostringstream gp;
     gp << "set terminal pngcairo size 900," << 260 * rows + 60 << " font 'Sans,10' noenhanced\n"
-       << "set output " << quoted(png.string()) << "\n"
+       << kSetOutput
        // Headroom above the curves keeps the key (top right) off the data.
        << "set grid\nset key top right opaque box\nset offsets 0, 0, graph 0.18, graph 0.04\nset format y '%g'\n"
        << "set multiplot layout " << rows << ",1 title " << quoted("monitor " + monitor + " (" + run_dir + ")") << "\n";
@@ -173,7 +192,7 @@ std::vector<std::string> plot_fields(const std::string& run_dir, const std::stri
   const RunSeries series(run_dir, phase);
   const int dim = series.dimension();
   const fs::path plots = fs::path(run_dir) / "plots";
-  fs::create_directories(plots);
+  files::RunDirectory run(run_dir);
   TempDir tmp;
   std::vector<std::string> written;
   for (double t_req : times) {
@@ -243,10 +262,12 @@ std::vector<std::string> plot_fields(const std::string& run_dir, const std::stri
     if (std::abs(t - t_req) > 1e-9 * std::max(1.0, std::abs(t_req))) title += " (frame nearest " + num(t_req) + " s)";
     if (dim == 3) title += ", particles at z = " + num(z_layer) + " m";
 
-    const fs::path png = plots / ("field_" + quantity + "_" + num(t_req) + ".png");
+    const std::string name = "field_" + quantity + "_" + num(t_req) + ".png";
+    run.claim("plots/" + name);
+    const fs::path png = plots / name;
     std::ostringstream gp;
     gp << "set terminal pngcairo size " << std::lround(width) << "," << std::lround(height) << " font 'Sans,11' noenhanced\n"
-       << "set output " << quoted(png.string()) << "\n"
+       << kSetOutput
        << "set title " << quoted(title) << "\nset size ratio -1\n"
        << "set lmargin at screen " << sx(x_plot) << "\nset rmargin at screen " << sx(x_plot + plot_w) << "\n"
        << "set bmargin at screen " << sy(y_plot) << "\nset tmargin at screen " << sy(y_plot + plot_h) << "\n"
@@ -317,7 +338,7 @@ void plot_element_curves(const CsvResult& table, const std::string& title, const
   std::ostringstream gp;
   const bool grid2 = panels.size() == 4;
   gp << "set terminal pngcairo size " << (grid2 ? "1200,900" : "1500,480") << " font 'sans,10'\n"
-     << "set output " << quoted(png) << "\n"
+     << kSetOutput
      << "set grid\n" << (block_p0.size() > 1 ? "set key top right\n" : "unset key\n")
      << "set multiplot layout " << (grid2 ? "2,2" : "1,3") << " title " << quoted(title) << "\n";
   for (const Panel& pl : panels) {

@@ -12,6 +12,7 @@
 
 #include "postprocess/format.hpp"
 #include "postprocess/postprocess.hpp"
+#include "scene/files.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -165,6 +166,8 @@ std::string write_report(const std::string& run_dir, const std::vector<Reference
   const json scene = load(dir / "scene.json");
   const json run = load(dir / "run.json");
   for (const auto& r : references) compare(run_dir, r.column, r.path);  // every error before any file is written
+  files::RunDirectory ledger(dir);
+  ledger.claim("report.md");  // refused up front when a report.md there is not swmpm's
 
   // Plots: monitor plots when missing (always when references are to be overlaid), and the final
   // displacement field when no field picture exists yet.
@@ -208,8 +211,7 @@ std::string write_report(const std::string& run_dir, const std::vector<Reference
   }
 
   const fs::path path = dir / "report.md";
-  std::ofstream md(path);
-  if (!md) throw std::runtime_error(path.string() + ": cannot write file");
+  std::ostringstream md;
   md << "# Run report: " << get(scene, "name") << "\n\n"
      << "Run directory `" << run_dir << "`. Everything below is read from its `scene.json`, `run.json`, "
      << "`monitors.csv` and `output/`; units SI.\n\n";
@@ -228,7 +230,7 @@ std::string write_report(const std::string& run_dir, const std::vector<Reference
   md << "\n";
   for (const auto& png : monitor_pngs) md << "![" << fs::path(png).stem().string() << "](" << fs::relative(png, dir).string() << ")\n\n";
   for (const auto& png : field_pngs) md << "![" << fs::path(png).stem().string() << "](" << fs::relative(png, dir).string() << ")\n\n";
-  if (!md) throw std::runtime_error(path.string() + ": write failed");
+  ledger.write_text("report.md", md.str());
   return path.string();
 }
 

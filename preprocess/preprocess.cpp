@@ -13,6 +13,7 @@
 #include "preprocess/initial_state.hpp"
 #include "preprocess/shape.hpp"
 #include "scene/expression.hpp"
+#include "scene/files.hpp"
 
 namespace fs = std::filesystem;
 
@@ -322,10 +323,44 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
            "hencky: finite strain; only mohr-coulomb and nor-sand read the switch); remove the key");
 }
 
+/// The run directory preprocess writes: a folder that holds an earlier run is cleared (only the
+/// files swmpm wrote there) when `overwrite` is given and refused otherwise; a file of a name swmpm
+/// writes that swmpm did not write is always refused.
+void prepare_run_directory(files::RunDirectory& run, bool overwrite) {
+  if (run.holds_a_run()) {
+    if (!overwrite) {
+      std::string status;
+      try {
+        std::ifstream in(run / "run.json");
+        status = nlohmann::json::parse(in).value("status", "");
+      } catch (const std::exception&) {
+      }
+      throw files::RunDirectoryError(
+          run.dir().string() + ": holds an earlier swmpm run" + (status.empty() ? "" : " (status " + status + ")") +
+          "; pass --overwrite to replace it (only the files swmpm wrote there are removed), or choose another run "
+          "directory (-o)");
+    }
+    run.remove_owned([](const std::string&) { return true; });
+  }
+  const auto foreign = run.foreign(files::swmpm_files_in(run.dir()));
+  if (!foreign.empty())
+    throw files::RunDirectoryError((run / foreign.front()).string() +
+                                   " exists and swmpm did not write it; swmpm never replaces or removes a file it did "
+                                   "not write: choose an empty or new run directory (-o)" +
+                                   (foreign.size() > 1 ? " (" + std::to_string(foreign.size() - 1) + " more such files)"
+                                                       : std::string()));
+}
+
 }  // namespace
 
 std::string preprocess(const std::string& scene_path, const std::string& out_dir, bool quiet) {
-  const scene::Scene s = scene::load_scene(scene_path);
+  return preprocess(scene_path, out_dir, PreprocessOptions{quiet, false, false});
+}
+
+std::string preprocess(const std::string& scene_path, const std::string& out_dir, const PreprocessOptions& options) {
+  scene::Scene s = scene::load_scene(scene_path);
+  s.trust_geometry = options.trust_geometry;
+  const bool quiet = options.quiet;
   reject_unused_switches(scene_path, s);
   // Everything is built in memory first, so a failure writes nothing.
   const Phases phases = seed_phases(s);
@@ -333,22 +368,26 @@ std::string preprocess(const std::string& scene_path, const std::string& out_dir
     throw scene::SceneError({scene_path + ": /bodies: no particle was seeded (are the bodies inside the grid?)"});
 
   const fs::path dir = out_dir.empty() ? fs::path("runs") / s.name : fs::path(out_dir);
-  fs::create_directories(dir / "particles");
-  std::ofstream(dir / "scene.json") << scene::to_json(s).dump(2) << "\n";
+  files::RunDirectory run(dir);
+  prepare_run_directory(run, options.overwrite);
   if (!quiet) std::cout << "preprocess: formulation " << scene::to_string(s.formulation) << " (" << s.formulation_reason << ")\n";
   const bool pore_fluid_on_solid = phases.solid.find("fluid_mass") != nullptr;  // single-point (double-point: water points in fluid.vtu)
-  for (const auto& [phase, cloud] : {std::pair{"solid", &phases.solid}, std::pair{"fluid", &phases.fluid},
-                                     std::pair{"surfaces", &phases.surfaces}}) {
-    const fs::path file = dir / "particles" / (std::string(phase) + ".vtu");
-    if (cloud->size() == 0) {
-      fs::remove(file);  // an earlier run's file would be read as this scene's particles
-      continue;
+  try {
+    run.write_text("scene.json", scene::to_json(s).dump(2) + "\n");
+    for (const auto& [phase, cloud] : {std::pair{"solid", &phases.solid}, std::pair{"fluid", &phases.fluid},
+                                       std::pair{"surfaces", &phases.surfaces}}) {
+      if (cloud->size() == 0) continue;
+      const std::string file = "particles/" + std::string(phase) + ".vtu";
+      run.claim(file);
+      scene::write_vtu((run / file).string(), *cloud);
+      if (!quiet)
+        std::cout << "preprocess: " << cloud->size() << " " << (phase == std::string("surfaces") ? "named-surface samples" : std::string(phase) + " particles")
+                  << (phase == std::string("solid") && pore_fluid_on_solid ? " (with their pore fluid)" : "") << " -> "
+                  << (run / file).string() << "\n";
     }
-    scene::write_vtu(file.string(), *cloud);
-    if (!quiet)
-      std::cout << "preprocess: " << cloud->size() << " " << (phase == std::string("surfaces") ? "named-surface samples" : std::string(phase) + " particles")
-                << (phase == std::string("solid") && pore_fluid_on_solid ? " (with their pore fluid)" : "") << " -> "
-                << file.string() << "\n";
+  } catch (const files::WriteError&) {
+    run.remove_owned([](const std::string&) { return true; });  // no half-written run is left
+    throw;
   }
   if (!quiet)
     for (const auto& note : phases.notes) std::cout << "preprocess: " << note << "\n";

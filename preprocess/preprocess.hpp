@@ -50,8 +50,17 @@ Phases seed_phases(const scene::Scene& s);
 /// The solid particles of a scene (all bodies with a solid material), as written to solid.vtu.
 scene::PointCloud seed_solid(const scene::Scene& s);
 
+struct PreprocessOptions {
+  bool quiet = false;
+  bool overwrite = false;       // --overwrite: replace an earlier run in the folder (swmpm's files only)
+  bool trust_geometry = false;  // --trust-geometry: mesh .geo scripts without reading them first
+};
+
 /// Runs the whole stage. Nothing is written unless everything succeeds. Returns the run directory
-/// (`out_dir`, or runs/<scene name> when empty). Throws scene::SceneError / std::runtime_error.
+/// (`out_dir`, or runs/<scene name> when empty). Throws scene::SceneError (the scene),
+/// files::RunDirectoryError (a folder holding an earlier run, or a file swmpm did not write where
+/// it would write one), files::WriteError, std::runtime_error.
+std::string preprocess(const std::string& scene_path, const std::string& out_dir, const PreprocessOptions& options);
 std::string preprocess(const std::string& scene_path, const std::string& out_dir, bool quiet);
 
 }  // namespace swmpm::pre

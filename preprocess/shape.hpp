@@ -58,13 +58,24 @@ class GeometryError : public std::runtime_error {
   std::string key_;
 };
 
+/// How far a geometry file that is a program (a gmsh .geo script) is trusted: by default it is
+/// read first and refused when it could run commands, write files or read files outside the
+/// scene's folder and its own (preprocess/geo_script.hpp); `trust_scripts` (--trust-geometry)
+/// meshes it as it is.
+struct GeoAccess {
+  std::string scene_dir;
+  bool trust_scripts = false;
+};
+
 /// Builds the shape of a body's geometry (throws GeometryError). File paths in `g` are absolute
-/// (the parser resolved them); `scene_dir` is kept for callers that build geometries by hand.
-std::unique_ptr<Shape> make_shape(const scene::Geometry& g, int dimension, const std::string& scene_dir);
+/// (the parser resolved them); `scene_dir` is the scene file's folder.
+std::unique_ptr<Shape> make_shape(const scene::Geometry& g, int dimension, const std::string& scene_dir,
+                                  bool trust_scripts = false);
 
 /// Every body's shape, checked against the scene where only the files can tell: bounds from a
 /// file inside the grid, named surfaces that loads and boundaries refer to present. Throws
 /// scene::SceneError with one line per problem, "<scene>: /bodies/N/geometry/...: ...".
+/// Geometry scripts are trusted only when s.trust_geometry is set.
 std::vector<std::unique_ptr<Shape>> make_shapes(const scene::Scene& s);
 
 /// Face bits of the named surfaces within `tol` of x: bit scene::kFirstSurfaceBit + k for the

@@ -3,10 +3,8 @@
 // elements of the scene's dimension (or of one physical group); the inside test locates points in
 // those elements split into simplices; physical groups of dimension dim - 1 become named surfaces.
 #include <gmsh.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +12,7 @@
 #include <mutex>
 #include <regex>
 
+#include "preprocess/geo_script.hpp"
 #include "preprocess/shape_types.hpp"
 
 namespace fs = std::filesystem;
@@ -67,34 +66,6 @@ class GmshSession {
   }
   std::lock_guard<std::mutex> lock_;
   std::size_t seen_ = 0;
-};
-
-/// A .geo prelude that defines the parameters before the file's DefineConstant[] runs: gmsh keeps
-/// a variable that is already defined, so these values win. Removed when it goes out of scope.
-class Prelude {
- public:
-  explicit Prelude(const std::map<std::string, double>& parameters) {
-    static std::atomic<int> counter{0};
-    path_ = fs::temp_directory_path() /
-            ("swmpm-gmsh-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".geo");
-    std::ofstream out(path_);
-    for (const auto& [name, value] : parameters) {
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "%.17g", value);
-      out << name << " = " << buf << ";\n";
-    }
-    if (!out) throw GeometryError("parameters", "cannot write the gmsh parameter file " + path_.string());
-  }
-  ~Prelude() {
-    std::error_code ec;
-    fs::remove(path_, ec);
-  }
-  Prelude(const Prelude&) = delete;
-  Prelude& operator=(const Prelude&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
 };
 
 std::string join(const std::vector<std::string>& v) {
@@ -248,11 +219,14 @@ std::vector<int> entities_of(int dim, int physical_tag) {
 
 class GmshShape final : public SurfacedShape {
  public:
-  GmshShape(const scene::Geometry& g, int dim) : file_(g.file) {
+  GmshShape(const scene::Geometry& g, int dim, const GeoAccess& access) : file_(g.file) {
     std::error_code ec;
     if (!fs::is_regular_file(file_, ec)) fail("no such file");
-    GmshSession session;
     const bool geo = fs::path(file_).extension() == ".geo" || fs::path(file_).extension() == ".GEO";
+    // A .geo is a program: read it before gmsh runs it (preprocess/geo_script.hpp).
+    if (geo && !access.trust_scripts)
+      check_geo_script(file_, {{fs::path(access.scene_dir), fs::path(file_).parent_path()}});
+    GmshSession session;
     open(g, geo, session);
     check_dimension(dim);
     if (geo) {
@@ -282,8 +256,16 @@ class GmshShape final : public SurfacedShape {
           fail("got parameter \"" + name + "\", but the file has no DefineConstant of that name (defined: " +
                    join(defined) + ")",
                "parameters/" + name);
-      const Prelude prelude(g.parameters);
-      gmsh::open(prelude.path().string());
+      // The values go first, in a private file: gmsh keeps a variable that is already defined, so
+      // they win over the file's DefineConstant defaults.
+      std::string prelude;
+      for (const auto& [name, value] : g.parameters) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%.17g", value);
+        prelude += name + " = " + buf + ";\n";
+      }
+      const PrivateTempFile file(fs::path(file_).stem().string() + "-parameters.geo", prelude);
+      gmsh::open(file.path().string());
       gmsh::merge(file_);
     } else {
       gmsh::open(file_);
@@ -378,6 +360,8 @@ class GmshShape final : public SurfacedShape {
 
 }  // namespace
 
-std::unique_ptr<Shape> make_gmsh(const scene::Geometry& g, int dim) { return std::make_unique<GmshShape>(g, dim); }
+std::unique_ptr<Shape> make_gmsh(const scene::Geometry& g, int dim, const GeoAccess& access) {
+  return std::make_unique<GmshShape>(g, dim, access);
+}
 
 }  // namespace swmpm::pre

@@ -74,7 +74,7 @@ std::unique_ptr<Shape> make_polygon(const Polyline2& vertices,
 std::unique_ptr<Shape> make_slope(const scene::Geometry& g);
 std::unique_ptr<Shape> make_footing(const scene::Geometry& g, int dim);
 /// shape_gmsh.cpp
-std::unique_ptr<Shape> make_gmsh(const scene::Geometry& g, int dim);
+std::unique_ptr<Shape> make_gmsh(const scene::Geometry& g, int dim, const GeoAccess& access);
 /// shape_surface_mesh.cpp
 std::unique_ptr<Shape> make_surface_mesh(const scene::Geometry& g);
 

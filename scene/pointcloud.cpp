@@ -1,10 +1,15 @@
 #include "scene/pointcloud.hpp"
 
+#include <vtkErrorCode.h>
+#include <vtkObject.h>
+
 #include <fstream>
 #include <iomanip>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
+
+#include "scene/files.hpp"
 
 #include <vtkCellArray.h>
 #include <vtkDoubleArray.h>
@@ -75,8 +80,14 @@ void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression 
     grid->GetPointData()->AddArray(arr);
   }
 
+  // VTK reports a failed write on stderr once per block (megabytes of it on a full disk); the
+  // error code is read instead and reported once, as a WriteError naming the file.
+  static const bool quiet_vtk = [] {
+    vtkObject::GlobalWarningDisplayOff();
+    return true;
+  }();
+  (void)quiet_vtk;
   auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
-  writer->SetFileName(path.c_str());
   writer->SetInputData(grid);
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();  // raw binary
@@ -92,7 +103,27 @@ void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression 
       writer->SetCompressorTypeToNone();
       break;
   }
-  if (writer->Write() != 1) throw std::runtime_error(path + ": could not write VTU file");
+  files::write_atomically(path, [&](const std::string& temporary) {
+    writer->SetFileName(temporary.c_str());
+    const int ok = writer->Write();
+    const unsigned long code = writer->GetErrorCode();
+    if (ok != 1 || code != vtkErrorCode::NoError)
+      throw files::WriteError(path, code == vtkErrorCode::OutOfDiskSpaceError
+                                        ? std::string("No space left on device (or past the file size limit)")
+                                        : std::string("the VTU writer failed (") +
+                                              vtkErrorCode::GetStringFromErrorCode(code) + ")");
+    // The stream's last buffer reaches the file when it is closed, after the writer's checks: a
+    // complete VTU ends with its closing tag.
+    std::ifstream back(temporary, std::ios::binary | std::ios::ate);
+    const std::streamoff size = back ? static_cast<std::streamoff>(back.tellg()) : 0;
+    char tail[16] = {};
+    if (size >= 16) {
+      back.seekg(size - 16);
+      back.read(tail, 16);
+    }
+    if (size < 16 || std::string(tail, 16).find("</VTKFile>") == std::string::npos)
+      throw files::WriteError(path, "the file is incomplete (No space left on device?)");
+  });
 }
 
 PointCloud read_vtu(const std::string& path) {
@@ -125,8 +156,7 @@ PointCloud read_vtu(const std::string& path) {
 
 void write_pvd(const std::string& path, const std::vector<PvdEntry>& entries) {
   // The PVD collection format is ParaView's; VTK has no writer for it, it is six lines of XML.
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot write file");
+  std::ostringstream out;
   out << "<?xml version=\"1.0\"?>\n"
       << "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
       << "  <Collection>\n";
@@ -135,6 +165,7 @@ void write_pvd(const std::string& path, const std::vector<PvdEntry>& entries) {
     out << "    <DataSet timestep=\"" << e.time << "\" group=\"" << e.group << "\" part=\"" << e.part
         << "\" file=\"" << e.file << "\"/>\n";
   out << "  </Collection>\n</VTKFile>\n";
+  files::write_text_atomically(path, out.str());
 }
 
 std::vector<PvdEntry> read_pvd(const std::string& path) {

@@ -217,6 +217,7 @@ struct Scene {
   Solver solver;
   Initialisation initialisation;
   std::string source_file;  // path of the scene file (for relative paths and messages)
+  bool trust_geometry = false;  // --trust-geometry: mesh .geo scripts unchecked (not a scene key)
 
   const Material& material(const std::string& name) const;
   int material_index(const std::string& name) const;

@@ -17,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scene/files.hpp"
 #include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 #include "solver/formulation.hpp"
@@ -31,30 +32,65 @@ namespace fs = std::filesystem;
 namespace swmpm {
 namespace {
 
-volatile std::sig_atomic_t g_interrupted = 0;
-extern "C" void on_sigint(int) { g_interrupted = 1; }
+volatile std::sig_atomic_t g_interrupted = 0;  // the signal that asked the run to stop (0: none)
+extern "C" void on_stop_signal(int sig) { g_interrupted = sig; }
 
-/// Writes to log.txt always and to the terminal unless quiet.
+/// Writes to log.txt always and to the terminal unless quiet. A failed write to log.txt throws
+/// files::WriteError once (the run stops on it); later lines go to the terminal only.
 class Log {
  public:
-  Log(const std::string& path, bool quiet) : file_(path), quiet_(quiet) {}
+  explicit Log(bool quiet) : quiet_(quiet) {}
+  void open(const fs::path& path) { file_ = files::CheckedFile(path); }
   void line(const std::string& s) {
-    file_ << s << "\n";
-    file_.flush();
     if (!quiet_) std::cout << s << std::endl;
+    to_file(s);
   }
-  /// A failure (diverged, interrupted): log.txt, and one line on stderr even when quiet
-  /// (interface.md §1: a failing command says why on stderr).
+  /// A failure (diverged, interrupted, a failed write): one line on stderr even when quiet
+  /// (interface.md §1: a failing command says why on stderr), and log.txt where it can be written.
   void failure(const std::string& s) {
-    file_ << s << "\n";
-    file_.flush();
     std::cerr << "swmpm: " << s << std::endl;
+    try {
+      to_file(s);
+    } catch (const files::WriteError&) {
+    }
   }
 
  private:
-  std::ofstream file_;
+  void to_file(const std::string& s) {
+    if (!file_.is_open() || broken_) return;
+    try {
+      file_.write(s + "\n");
+    } catch (const files::WriteError&) {
+      broken_ = true;
+      throw;
+    }
+  }
+  files::CheckedFile file_;
   bool quiet_;
+  bool broken_ = false;
 };
+
+/// What a solve writes in its run directory; a new solve replaces these (swmpm's own, on the
+/// ledger) and keeps preprocess's scene.json and particles/.
+bool solve_output(const std::string& relative) {
+  return relative == "run.json" || relative == "log.txt" || relative == "monitors.csv" || relative == "report.md" ||
+         relative.rfind("output/", 0) == 0 || relative.rfind("plots/", 0) == 0;
+}
+
+/// run.json while the run goes on: status `running`. Padded to 8 KiB, so that the final run.json
+/// can overwrite it in place when the disk has no room for a new file.
+std::string running_report(const std::string& formulation) {
+  nlohmann::ordered_json rj;
+  rj["status"] = "running";
+  rj["formulation"] = formulation;
+  rj["pid"] = static_cast<long>(::getpid());
+  rj["started_unix_seconds"] = static_cast<long>(std::time(nullptr));
+  rj["software_version"] = version;
+  rj["git_hash"] = git_hash;
+  std::string text = rj.dump(2) + "\n";
+  if (text.size() < 8192) text.append(8192 - text.size() - 1, ' ').push_back('\n');
+  return text;
+}
 
 std::string fmt(double v, int prec = 6) {
   std::ostringstream os;
@@ -76,7 +112,7 @@ template <int Dim>
 class Runner {
  public:
   Runner(const std::string& run_dir, const SolveOptions& opt)
-      : dir_(run_dir), opt_(opt), log_((fs::path(run_dir) / "log.txt").string(), opt.quiet) {}
+      : dir_(run_dir), run_dir_(run_dir), opt_(opt), log_(opt.quiet) {}
 
   int run() {
     const auto wall_start = std::chrono::steady_clock::now();
@@ -108,12 +144,23 @@ class Runner {
     compression_ = scene::vtu_compression(scene_.output.compression);
     threads_ = omp_get_max_threads();
 
-    const fs::path out = dir_ / "output";
-    fs::remove_all(out);
-    fs::create_directories(out);
+    // The run directory: an earlier solve's files give way (only those swmpm wrote), a file of a
+    // name the solve writes that swmpm did not write stops it before anything is written.
+    run_dir_.remove_owned(solve_output);
+    const auto foreign = run_dir_.foreign(files::swmpm_files_in(dir_));
+    for (const auto& f : foreign)
+      if (solve_output(f))
+        throw files::RunDirectoryError((dir_ / f).string() +
+                                       " exists and swmpm did not write it; swmpm never replaces or removes a file it "
+                                       "did not write: move it away");
+    run_dir_.claim("log.txt");
+    log_.open(dir_ / "log.txt");
+    run_dir_.write_text("run.json", running_report(formulation->name()), true);
+    run_dir_.claim("monitors.csv");
+    std::filesystem::create_directories(dir_ / "output");
     const std::string stamp = "# swmpm " + std::string(version) + " (" + git_hash + "), scene " + scene_.name +
                               ", formulation " + formulation->name();
-    Monitors<Dim> monitors(scene_, state_, (dir_ / "monitors.csv").string(), stamp);
+    Monitors<Dim> monitors(scene_, state_, dir_ / "monitors.csv", stamp);
 
     log_.line("swmpm " + std::string(version) + " (" + git_hash + ") solving " + scene_.name + ": " +
               formulation->name() + ", " + std::to_string(Dim) + "D, " + scene::to_string(scene_.grid.shape_function) +
@@ -136,7 +183,8 @@ class Runner {
       }
     }
 
-    std::signal(SIGINT, on_sigint);
+    std::signal(SIGINT, on_stop_signal);
+    std::signal(SIGTERM, on_stop_signal);  // a scheduler's or `kill`'s stop: as an interrupt
     const double end = scene_.time.end;
     const scene::Initialisation& init = scene_.initialisation;
     const double t_start = init.enabled() ? -init.duration : 0.0;  // the initialisation runs before t = 0
@@ -164,6 +212,9 @@ class Runner {
     auto last_progress = std::chrono::steady_clock::now();
     const auto loop_start = last_progress;
 
+    // A write that fails (a full disk, a file size limit, a removed folder) stops the run with
+    // status `failed`: the frames before it are complete, results.pvd lists them, run.json says why.
+    try {
     write_frame(t_start);
     next_frame = scene_.output.interval > 0 ? t_start + scene_.output.interval : end;
     monitors.record(state_, *formulation, work);
@@ -322,10 +373,19 @@ class Runner {
     } else if (status == "interrupted") {
       formulation->complete_output_fields(state_, true);
       write_frame(state_.time);
-      log_.failure("interrupted at t = " + fmt(state_.time) + " s; wrote the current state as the final frame");
+      log_.failure(std::string("interrupted by ") + (g_interrupted == SIGTERM ? "SIGTERM" : "SIGINT") + " at t = " +
+                   fmt(state_.time) + " s; wrote the current state as the final frame");
     } else if (frames_.empty() || frames_.back().time < state_.time - eps_t) {
       formulation->complete_output_fields(state_, true);
       write_frame(state_.time);
+    }
+    } catch (const files::WriteError& e) {
+      diagnosis = diagnosis.empty() ? e.what() : diagnosis + "; then " + e.what();
+      status = "failed";
+      log_.failure(std::string("FAILED: ") + e.what() + "; the run stops here. " +
+                   (frames_.empty() ? std::string("No frame is complete")
+                                    : "The last complete frame is t = " + fmt(frames_.back().time) + " s") +
+                   " (step " + std::to_string(state_.step) + ")");
     }
 
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
@@ -363,7 +423,7 @@ class Runner {
     rj["peak_memory_bytes"] = peak_memory_bytes();
     rj["particle_bytes"] = state_.solid.size() * state_.solid.bytes_per_particle() +
                            state_.fluid.size() * state_.fluid.bytes_per_particle();
-    rj["frames"] = frame_count_;
+    rj["frames"] = static_cast<int>(std::count_if(frames_.begin(), frames_.end(), [](const auto& e) { return e.part == 0; }));
     if (status == "diverged") rj["last_good_frame_time"] = last_good_frame_time_;
     nlohmann::ordered_json stages;
     const auto& st = formulation->stage_times();
@@ -377,8 +437,9 @@ class Runner {
     }
     rj["software_version"] = version;
     rj["git_hash"] = git_hash;
-    std::ofstream(dir_ / "run.json") << rj.dump(2) << "\n";
+    write_run_report(rj.dump(2) + "\n", status);
 
+    try {
     std::ostringstream summary;
     summary << status << ": " << state_.step << " steps to t = " << fmt(state_.time) << " s in " << fmt(wall, 4)
             << " s wall (" << fmt(us_pps, 4) << " us per particle-step, " << fmt(loop_us_pps, 4)
@@ -390,16 +451,31 @@ class Runner {
     // Shares of the stages' sum; the stages cover the formulation's step only, so say how much of
     // the loop that is, and the frames' share (the rest: monitors, energy checks, time-step control).
     split << "stages (" << fmt(100.0 * total / std::max(loop_wall, 1e-300), 3) << "% of the time loop, "
-          << frame_count_ << " frames " << fmt(100.0 * frame_seconds_ / std::max(loop_wall, 1e-300), 3)
+          << rj["frames"].get<int>() << " frames " << fmt(100.0 * frame_seconds_ / std::max(loop_wall, 1e-300), 3)
           << "%; the rest writes monitors and checks energy):";
     for (std::size_t k = 0; k < st.names.size(); ++k)
       split << " " << st.names[k] << " " << fmt(100.0 * st.seconds[k] / std::max(total, 1e-300), 3) << "%";
     log_.line(split.str());
     for (const auto& c : counters) log_.line(c.name + ": " + fmt(c.value, 6) + (c.unit.empty() ? "" : " " + c.unit));
-    return status == "completed" ? 0 : (status == "diverged" ? 3 : 4);
+    } catch (const files::WriteError& e) {  // log.txt; run.json is already written
+      log_.failure(e.what());
+    }
+    return status == "completed" ? 0 : status == "diverged" ? 3 : status == "interrupted" ? 4 : 5;
   }
 
  private:
+  /// The final run.json, replacing the `running` one. On a full disk, the padded `running` file
+  /// is overwritten in place (no new block needed); if even that fails, stderr says so.
+  void write_run_report(const std::string& text, std::string& status) {
+    try {
+      run_dir_.write_text("run.json", text, true);
+    } catch (const files::WriteError& e) {
+      const bool in_place = files::overwrite_in_place(dir_ / "run.json", text);
+      log_.failure(std::string(e.what()) + (in_place ? "; wrote it in place of the running one" : "; run.json is stale"));
+      if (!in_place) status = "failed";
+    }
+  }
+
   /// Gravity at time t: ramped over `gravity_ramp` from t = 0, or, with an initialisation phase,
   /// over its `gravity_ramp` from its start at t = -duration (then full from t = 0).
   std::array<double, 3> gravity_at(double t) const {
@@ -452,25 +528,35 @@ class Runner {
     return os.str();
   }
 
+  /// One frame: a VTU per particle set, then results.pvd, which lists a frame only once all of its
+  /// files are complete (each is written atomically; a failure throws files::WriteError).
   void write_frame(double t) {
     const auto start = std::chrono::steady_clock::now();
     const int k = frame_count_++;
-    char name[64];
-    std::snprintf(name, sizeof name, "solid_%06d.vtu", k);
-    scene::PointCloud solid = particles_to_cloud(state_.solid);
-    add_material_reports(solid, state_.solid, reporters_);
-    scene::write_vtu((dir_ / "output" / name).string(), solid, compression_);
-    frames_.push_back({t, "solid", 0, name});
-    if (state_.fluid.size()) {
-      std::snprintf(name, sizeof name, "fluid_%06d.vtu", k);
-      scene::write_vtu((dir_ / "output" / name).string(), water_points_to_cloud(state_.fluid), compression_);
-      frames_.push_back({t, "fluid", 1, name});
+    const std::size_t listed = frames_.size();
+    auto write_set = [&](const char* phase, int part, const scene::PointCloud& cloud) {
+      char name[64];
+      std::snprintf(name, sizeof name, "%s_%06d.vtu", phase, k);
+      run_dir_.claim(std::string("output/") + name);
+      scene::write_vtu((dir_ / "output" / name).string(), cloud, compression_);
+      frames_.push_back({t, phase, part, name});
+    };
+    try {
+      scene::PointCloud solid = particles_to_cloud(state_.solid);
+      add_material_reports(solid, state_.solid, reporters_);
+      write_set("solid", 0, solid);
+      if (state_.fluid.size()) write_set("fluid", 1, water_points_to_cloud(state_.fluid));
+      run_dir_.claim("output/results.pvd");
+      scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);
+    } catch (...) {
+      frames_.resize(listed);
+      throw;
     }
-    scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);
     frame_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 
   fs::path dir_;
+  files::RunDirectory run_dir_;  // the ledger of what swmpm wrote in dir_
   SolveOptions opt_;
   Log log_;
   scene::Scene scene_;

@@ -46,7 +46,7 @@ def main():
             with open(path, "w") as f:
                 json.dump(s, f, indent=2)
             run = os.path.join(a.runs, tag)
-            subprocess.run([a.swmpm, "-q", "run", path, "-o", run, "--threads", str(a.threads)], check=True)
+            subprocess.run([a.swmpm, "-q", "run", path, "-o", run, "--overwrite", "--threads", str(a.threads)], check=True)
             subprocess.run([a.swmpm, "postprocess", run, "plot", "--field", "mean_effective_stress"], check=True,
                            stdout=subprocess.DEVNULL)
             png = sorted(glob.glob(os.path.join(run, "plots", "field_mean_effective_stress_*.png")))[-1]

@@ -8,10 +8,9 @@
 namespace swmpm {
 
 template <int Dim>
-Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::string& path,
+Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::filesystem::path& path,
                         const std::string& header_comment)
     : out_(path) {
-  if (!out_) throw std::runtime_error(path + ": cannot write file");
   const auto& ps = st.solid;
   std::ostringstream header;
   header << "time";
@@ -74,14 +73,15 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
       header << "," << mon.name << "." << qn;
     }
   }
-  out_ << header_comment << "\n" << header.str() << "\n";
-  out_ << std::setprecision(10);
+  out_.write(header_comment + "\n" + header.str() + "\n");
+  row_ << std::setprecision(10);
 }
 
 template <int Dim>
 void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, double external_work) {
   const auto& ps = st.solid;
-  out_ << st.time;
+  row_.str("");
+  row_ << st.time;
   double ke = -1.0, se = -1.0;
   for (const Column& c : columns_) {
     double val = 0.0;
@@ -105,10 +105,10 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
         break;
       case Q::work: val = external_work; break;
     }
-    out_ << "," << val;
+    row_ << "," << val;
   }
-  out_ << "\n";
-  out_.flush();
+  row_ << "\n";
+  out_.write(row_.str());  // checked: a failed write throws files::WriteError
 }
 
 template <int Dim>

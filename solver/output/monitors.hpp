@@ -4,10 +4,12 @@
 #pragma once
 
 #include <cstdint>
-#include <fstream>
+#include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "scene/files.hpp"
 #include "scene/scene.hpp"
 #include "solver/formulation.hpp"
 
@@ -16,7 +18,8 @@ namespace swmpm {
 template <int Dim>
 class Monitors {
  public:
-  Monitors(const scene::Scene& s, const State<Dim>& st, const std::string& path, const std::string& header_comment);
+  Monitors(const scene::Scene& s, const State<Dim>& st, const std::filesystem::path& path,
+           const std::string& header_comment);
   /// Appends one row at the state's time.
   void record(const State<Dim>& st, const Formulation<Dim>& f, double external_work);
   /// Whether a column reads a field a formulation may fill only for output (pore pressure, water
@@ -39,7 +42,8 @@ class Monitors {
   std::vector<std::string> names_;
   std::vector<std::int64_t> monitor_particle_;  // ids, -1 for global
   std::vector<Column> columns_;
-  std::ofstream out_;
+  files::CheckedFile out_;
+  std::ostringstream row_;  // one row, formatted before it is written
 };
 
 }  // namespace swmpm

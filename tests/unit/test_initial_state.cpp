@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "preprocess/preprocess.hpp"
+#include "scene/files.hpp"
 #include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 #include "solver/output/particle_io.hpp"
@@ -337,7 +338,11 @@ TEST(Seeding, FreeWaterIsFluidParticlesOnly) {
   j["bodies"][0]["fluid"] = "water";
   j["bodies"][0]["initial"] = {{"pore_pressure", "hydrostatic"}};
   std::ofstream(first.parent_path() / "scene.json") << j.dump(2);
-  const fs::path run = swmpm::pre::preprocess((first.parent_path() / "scene.json").string(), first.string(), true);
+  // The folder holds a run: preprocess replaces it only when asked to (--overwrite).
+  EXPECT_THROW(swmpm::pre::preprocess((first.parent_path() / "scene.json").string(), first.string(), true),
+               swmpm::files::RunDirectoryError);
+  const fs::path run =
+      swmpm::pre::preprocess((first.parent_path() / "scene.json").string(), first.string(), {true, true, false});
   EXPECT_FALSE(fs::exists(run / "particles" / "solid.vtu"));
   const PointCloud f = swmpm::scene::read_vtu((run / "particles" / "fluid.vtu").string());
   ASSERT_EQ(f.size(), 20u * 10u * 4u);

@@ -1,0 +1,366 @@
+// Faults a demanding user or a security reviewer meets (issue 27, items 1-3), through the `swmpm`
+// command: a geometry script that would run commands, write or read files; a full disk; run
+// directories that hold a user's files or an earlier run; SIGTERM.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <regex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "support/run_helpers.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using swmpm::testing::read_text;
+using swmpm::testing::Result;
+using swmpm::testing::swmpm_cmd;
+
+json column_scene() { return swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/elastic-column/scene.json"); }
+
+void write(const fs::path& file, const std::string& text) { std::ofstream(file) << text; }
+
+/// A 2D unit square as a .geo script, with `extra` lines after the geometry.
+std::string square_geo(const std::string& extra) {
+  return "DefineConstant[ s = 0.1 ];\n"
+         "Point(1) = {0, 0, 0}; Point(2) = {s, 0, 0}; Point(3) = {s, 1, 0}; Point(4) = {0, 1, 0};\n"
+         "Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};\n"
+         "Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};\n" +
+         extra + "\n";
+}
+
+/// The elastic column with its body read from `geo` (a file name in the scene's folder).
+json gmsh_column(const std::string& geo, const json& parameters = json()) {
+  json s = column_scene();
+  s["bodies"][0]["geometry"] = {{"type", "gmsh"}, {"file", geo}};
+  if (!parameters.is_null()) s["bodies"][0]["geometry"]["parameters"] = parameters;
+  return s;
+}
+
+struct Probe {
+  fs::path dir;
+  Result r;
+};
+
+/// Preprocesses `scene` with `geo_text` as geometry.geo beside it; `flags` go to the command line.
+Probe preprocess_geo(const std::string& name, const std::string& geo_text, const std::string& flags = "",
+                     const json& parameters = json()) {
+  const fs::path dir = swmpm::testing::scratch("faults-" + name);
+  write(dir / "geometry.geo", geo_text);
+  write(dir / "scene.json", gmsh_column("geometry.geo", parameters).dump(2));
+  const Result r = swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + (dir / "run").string() + " " + flags, dir);
+  return {dir, r};
+}
+
+/// The scene's run directory is refused: exit 2, one line naming the .geo, its line and `construct`.
+void expect_refused(const std::string& name, const std::string& extra, const std::string& construct, int line = 5) {
+  const Probe p = preprocess_geo(name, square_geo(extra));
+  EXPECT_EQ(p.r.status, 2) << name << ": " << p.r.err;
+  EXPECT_NE(p.r.err.find("geometry.geo:" + std::to_string(line) + ": `" + construct), std::string::npos)
+      << name << ": the message names the file, the line and the construct: " << p.r.err;
+  EXPECT_NE(p.r.err.find("/bodies/0/geometry/file"), std::string::npos) << p.r.err;
+  EXPECT_NE(p.r.err.find("--trust-geometry"), std::string::npos) << p.r.err;
+  EXPECT_EQ(std::count(p.r.err.begin(), p.r.err.end(), '\n'), 1) << p.r.err;
+  EXPECT_FALSE(fs::exists(p.dir / "run")) << name << ": nothing may be written";
+}
+
+}  // namespace
+
+TEST(GeometryScript, CommandsAreRefusedAndDoNotRun) {
+  const fs::path marker = swmpm::testing::scratch("faults-marker") / "touched";
+  expect_refused("systemcall", "SystemCall \"touch " + marker.string() + "\";", "SystemCall");
+  expect_refused("system", "System \"touch " + marker.string() + "\";", "System");
+  expect_refused("nonblocking", "NonBlockingSystemCall \"touch " + marker.string() + "\";", "NonBlockingSystemCall");
+  expect_refused("onelab", "OnelabRun(\"x\", \"touch " + marker.string() + "\");", "OnelabRun");
+  EXPECT_FALSE(fs::exists(marker)) << "a refused script must not have run";
+}
+
+TEST(GeometryScript, WritesAndProcessControlAreRefused) {
+  const fs::path victim = swmpm::testing::scratch("faults-victim") / "victim.txt";
+  expect_refused("printf", "Printf(\"owned\") > \"" + victim.string() + "\";", "Printf(...) >");
+  expect_refused("printf-append", "Printf(\"s = %g\", s) >> \"" + victim.string() + "\";", "Printf(...) >>");
+  expect_refused("save", "Save \"" + victim.string() + "\";", "Save");
+  expect_refused("print", "Print \"" + victim.string() + "\";", "Print");
+  expect_refused("createdir", "CreateDir \"" + victim.string() + "\";", "CreateDir");
+  expect_refused("exit", "Exit;", "Exit");
+  expect_refused("sleep", "Sleep 1000;", "Sleep");
+  expect_refused("general-option", "General.OptionsFileName = \"" + victim.string() + "\";", "General.OptionsFileName");
+  expect_refused("solver-option", "Solver.Executable0 = \"/bin/sh\";", "Solver.Executable0");
+  EXPECT_FALSE(fs::exists(victim));
+}
+
+TEST(GeometryScript, FilesOutsideTheScenesFoldersAreRefused) {
+  expect_refused("include-passwd", "Include \"/etc/passwd\";", "Include \"/etc/passwd\"");
+  expect_refused("include-up", "Include \"../elsewhere.geo\";", "Include \"../elsewhere.geo\"");
+  expect_refused("include-expression", "Include StrCat(\"/etc/\", \"passwd\");", "Include");
+  expect_refused("merge-script", "Merge \"helper.py\";", "Merge \"");
+}
+
+TEST(GeometryScript, OrdinaryScriptsStillMesh) {
+  // Words in comments and strings are not commands; Mesh.* options, messages to the terminal and an
+  // Include beside the file are what geometry scripts use.
+  const fs::path dir = swmpm::testing::scratch("faults-ordinary");
+  write(dir / "sizes.geo", "Mesh.MeshSizeMax = 0.05; // no SystemCall here\n");
+  write(dir / "geometry.geo", square_geo("Include \"sizes.geo\";\n/* Exit; */ Printf(\"SystemCall %g\", s);\n"
+                                          "Geometry.Tolerance = 1e-9;"));
+  write(dir / "scene.json", gmsh_column("geometry.geo", {{"s", 0.1}}).dump(2));
+  const Result r = swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  const auto solid = swmpm::scene::read_vtu((dir / "run" / "particles" / "solid.vtu").string());
+  EXPECT_EQ(solid.size(), 2u * 20u * 4u) << "0.1 x 1 m at 2 x 2 particles per 0.05 m cell";
+}
+
+TEST(GeometryScript, TrustGeometryLiftsTheCheck) {
+  const fs::path marker = swmpm::testing::scratch("faults-trusted-marker") / "touched";
+  const Probe p = preprocess_geo("trusted", square_geo("SystemCall \"touch " + marker.string() + "\";"), "--trust-geometry");
+  EXPECT_EQ(p.r.status, 0) << p.r.err;
+  EXPECT_TRUE(fs::exists(marker)) << "--trust-geometry meshes the script as it is";
+}
+
+TEST(GeometryScript, ParameterPreludeIsPrivate) {
+  // Before: the prelude went to /tmp/swmpm-gmsh-<pid>-0.geo, opened with O_TRUNC through symlinks.
+  // A symlink planted at every such name for the next pids must keep its victim intact.
+  const fs::path dir = swmpm::testing::scratch("faults-prelude-victim");
+  write(dir / "victim.txt", "precious\n");
+  std::vector<fs::path> planted;
+  const pid_t next = ::getpid();
+  for (pid_t pid = next; pid < next + 200; ++pid) {
+    const fs::path link = fs::temp_directory_path() / ("swmpm-gmsh-" + std::to_string(pid) + "-0.geo");
+    std::error_code ec;
+    fs::create_symlink(dir / "victim.txt", link, ec);
+    if (!ec) planted.push_back(link);
+  }
+  const Probe p = preprocess_geo("prelude", square_geo(""), "", {{"s", 0.1}});
+  for (const auto& link : planted) fs::remove(link);
+  EXPECT_EQ(p.r.status, 0) << p.r.err;
+  EXPECT_EQ(read_text((dir / "victim.txt").string()), "precious\n");
+  // No prelude is left behind in the temporary folder.
+  for (const auto& e : fs::directory_iterator(fs::temp_directory_path()))
+    EXPECT_FALSE(fs::exists(e.path() / "geometry-parameters.geo")) << e.path();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Run directories
+
+namespace {
+
+/// Every file under `dir` with its content, for before/after comparisons.
+std::map<std::string, std::string> snapshot(const fs::path& dir) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) out[fs::relative(e.path(), dir).string()] = read_text(e.path().string());
+  return out;
+}
+
+/// The column, short: 0.1 s, frames every 0.05 s.
+json short_column() {
+  json s = column_scene();
+  s["time"]["end"] = 0.1;
+  return s;
+}
+
+}  // namespace
+
+TEST(RunDirectory, DotWithTheUsersFilesIsRefusedAndNothingChanges) {
+  const fs::path dir = swmpm::testing::scratch("faults-dot");
+  write(dir / "scene.json", short_column().dump(2));
+  fs::create_directories(dir / "output");
+  write(dir / "output" / "notes.txt", "mine\n");
+  const auto before = snapshot(dir);
+  const std::string cmd = "cd " + dir.string() + " && " + SWMPM_EXE + " run scene.json -o . > out.txt 2> err.txt";
+  const int raw = std::system(cmd.c_str());
+  const std::string err = read_text((dir / "err.txt").string());
+  EXPECT_EQ(WEXITSTATUS(raw), 2) << err;
+  EXPECT_NE(err.find("scene.json exists and swmpm did not write it"), std::string::npos) << err;
+  fs::remove(dir / "out.txt");
+  fs::remove(dir / "err.txt");
+  EXPECT_EQ(snapshot(dir), before) << "the user's scene.json and output/notes.txt are as they were";
+}
+
+TEST(RunDirectory, AnEarlierRunIsReplacedOnlyWithOverwriteAndOnlyItsOwnFiles) {
+  const fs::path dir = swmpm::testing::scratch("faults-rerun");
+  write(dir / "scene.json", short_column().dump(2));
+  const std::string run = (dir / "run").string();
+  ASSERT_EQ(swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + run + " -q", dir).status, 0);
+  ASSERT_TRUE(fs::exists(dir / "run" / "plots" / "top.png"));
+  write(dir / "run" / "output" / "my-notes.txt", "mine\n");
+  write(dir / "run" / "plots" / "my-sketch.png", "not a png\n");
+
+  // A second scene into the same folder: refused, the earlier run untouched.
+  json other = short_column();
+  other["output"]["monitors"] = json::array({other["output"]["monitors"][0]});
+  write(dir / "other.json", other.dump(2));
+  const auto before = snapshot(dir / "run");
+  Result r = swmpm_cmd("preprocess " + (dir / "other.json").string() + " -o " + run, dir);
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("holds an earlier swmpm run (status completed)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--overwrite"), std::string::npos) << r.err;
+  EXPECT_EQ(snapshot(dir / "run"), before);
+
+  // With --overwrite: the earlier run's files go, the user's stay; postprocess then has no old
+  // monitors to draw.
+  r = swmpm_cmd("preprocess " + (dir / "other.json").string() + " -o " + run + " --overwrite", dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  for (const char* gone : {"run.json", "monitors.csv", "log.txt", "plots/top.png", "plots/base.png",
+                           "output/results.pvd", "output/solid_000000.vtu"})
+    EXPECT_FALSE(fs::exists(dir / "run" / gone)) << gone;
+  EXPECT_EQ(read_text((dir / "run" / "output" / "my-notes.txt").string()), "mine\n");
+  EXPECT_EQ(read_text((dir / "run" / "plots" / "my-sketch.png").string()), "not a png\n");
+  r = swmpm_cmd("postprocess " + run + " plot", dir);
+  EXPECT_NE(r.status, 0) << "no monitors.csv of this run yet: " << r.out;
+
+  // Solving it replaces nothing of the user's either, and draws only this run's monitor.
+  r = swmpm_cmd("solve " + run + " -q", dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  r = swmpm_cmd("postprocess " + run + " plot -q", dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "run" / "plots" / "top.png"));
+  EXPECT_FALSE(fs::exists(dir / "run" / "plots" / "base.png"));
+  EXPECT_EQ(read_text((dir / "run" / "output" / "my-notes.txt").string()), "mine\n");
+  EXPECT_EQ(read_text((dir / "run" / "plots" / "my-sketch.png").string()), "not a png\n");
+
+  // A file of a name swmpm writes, put there by the user, is never replaced: refused up front.
+  write(dir / "run" / "report.md", "my report\n");
+  r = swmpm_cmd("postprocess " + run + " report -q", dir);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("report.md exists and swmpm did not write it"), std::string::npos) << r.err;
+  EXPECT_EQ(read_text((dir / "run" / "report.md").string()), "my report\n");
+}
+
+namespace {
+
+/// Runs `swmpm ARGS` in the background; returns its pid.
+pid_t spawn(const std::vector<std::string>& args, const fs::path& out) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::freopen(out.c_str(), "w", stderr);
+    std::freopen("/dev/null", "w", stdout);
+    std::vector<char*> argv{const_cast<char*>(SWMPM_EXE)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(SWMPM_EXE, argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+}  // namespace
+
+TEST(RunDirectory, RunJsonSaysRunningAndSigtermInterruptsKeepingTheState) {
+  const fs::path dir = swmpm::testing::scratch("faults-sigterm");
+  json s = column_scene();
+  s["time"]["end"] = 1e4;  // far longer than the test waits
+  s["output"]["interval"] = 1e3;
+  write(dir / "scene.json", s.dump(2));
+  const std::string run = (dir / "run").string();
+  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run + " -q", dir).status, 0);
+  const pid_t pid = spawn({"solve", run, "--threads", "1"}, dir / "stderr.txt");
+  json state;
+  for (int i = 0; i < 200; ++i) {  // until the first steps are done (10 s at most)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    try {
+      state = swmpm::testing::load_json(run + "/run.json");
+      if (state.value("status", "") == "running" && fs::exists(dir / "run" / "output" / "results.pvd")) break;
+    } catch (const std::exception&) {
+    }
+  }
+  EXPECT_EQ(state.value("status", ""), "running") << "run.json marks a run in progress";
+  EXPECT_EQ(state.value("pid", 0L), static_cast<long>(pid));
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  ::kill(pid, SIGTERM);
+  int raw = 0;
+  ::waitpid(pid, &raw, 0);
+  ASSERT_TRUE(WIFEXITED(raw)) << "SIGTERM is handled, not fatal";
+  EXPECT_EQ(WEXITSTATUS(raw), 4);
+  const json done = swmpm::testing::load_json(run + "/run.json");
+  EXPECT_EQ(done["status"], "interrupted");
+  EXPECT_GT(done["steps"].get<long>(), 0);
+  EXPECT_NE(read_text((dir / "stderr.txt").string()).find("interrupted by SIGTERM"), std::string::npos);
+  // The state at the stop is the last frame, readable.
+  const auto frames = swmpm::scene::read_pvd(run + "/output/results.pvd");
+  ASSERT_GE(frames.size(), 2u);
+  EXPECT_NEAR(frames.back().time, done["end_time"].get<double>(), 1e-12);
+  EXPECT_EQ(swmpm::testing::last_frame(run).size(), 160u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// A full disk
+
+namespace {
+
+/// What a run left when its writes failed: exit 5, run.json `failed` with the reason, every frame
+/// results.pvd lists complete, monitors.csv ending with a whole row.
+void expect_failed_cleanly(const fs::path& run, int status, const std::string& err, const std::string& reason) {
+  EXPECT_EQ(status, 5) << err;
+  EXPECT_NE(err.find(reason), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << "one line on stderr: " << err;
+  const json rj = swmpm::testing::load_json((run / "run.json").string());
+  EXPECT_EQ(rj["status"], "failed");
+  EXPECT_NE(rj["diagnosis"].get<std::string>().find(reason), std::string::npos);
+  const auto frames = swmpm::scene::read_pvd((run / "output" / "results.pvd").string());
+  EXPECT_GE(frames.size(), 1u);
+  EXPECT_EQ(rj["frames"].get<std::size_t>(), frames.size());
+  for (const auto& f : frames) EXPECT_EQ(swmpm::scene::read_vtu((run / "output" / f.file).string()).size(), 160u) << f.file;
+  const std::string monitors = read_text((run / "monitors.csv").string());
+  ASSERT_FALSE(monitors.empty());
+  EXPECT_EQ(monitors.back(), '\n') << "monitors.csv ends with a whole row";
+  // No temporary is left beside the frames.
+  for (const auto& e : fs::directory_iterator(run / "output"))
+    EXPECT_EQ(e.path().filename().string().find(".swmpm-"), std::string::npos) << e.path();
+}
+
+/// The column with a frame and a monitor row every step for 0.5 s (550 steps).
+json frame_every_step() {
+  json s = column_scene();
+  s["time"]["end"] = 0.5;
+  s["output"]["interval"] = 1e-4;
+  s["output"]["monitor_interval"] = 0.0;
+  return s;
+}
+
+}  // namespace
+
+TEST(FullDisk, FileSizeLimitStopsTheRunWithStatusFailed) {
+  // RLIMIT_FSIZE (no root needed): monitors.csv and results.pvd outgrow 32 KiB mid-run; writes fail
+  // with EFBIG.
+  const fs::path dir = swmpm::testing::scratch("faults-fsize");
+  write(dir / "scene.json", frame_every_step().dump(2));
+  const fs::path run = dir / "run";
+  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run.string() + " -q", dir).status, 0);
+  const std::string cmd = "trap '' XFSZ; ulimit -f 32; exec " + std::string(SWMPM_EXE) + " solve " + run.string() +
+                          " -q 2> " + (dir / "err.txt").string();
+  const int raw = std::system(("bash -c \"" + cmd + "\"").c_str());
+  expect_failed_cleanly(run, WEXITSTATUS(raw), read_text((dir / "err.txt").string()), "File too large");
+}
+
+TEST(FullDisk, FullFilesystemStopsTheRunAndPreprocessWritesNothing) {
+  // A 400 KiB tmpfs in a private mount namespace (root only; skipped elsewhere).
+  const fs::path dir = swmpm::testing::scratch("faults-enospc");
+  write(dir / "scene.json", frame_every_step().dump(2));
+  const fs::path mnt = dir / "disk", kept = dir / "kept";
+  fs::create_directories(mnt);
+  const std::string script =
+      "set -e; mount -t tmpfs -o size=400k tmpfs " + mnt.string() + "; cd " + dir.string() + "; " +
+      std::string(SWMPM_EXE) + " preprocess scene.json -o " + (mnt / "run").string() + " -q; set +e; " +
+      SWMPM_EXE + " solve " + (mnt / "run").string() + " -q 2> err.txt; echo $? > status.txt; " +
+      // preprocess into the full disk: exit 5, and nothing left behind
+      "head -c 1000000 /dev/zero > " + (mnt / "filler").string() + " 2>/dev/null; " + SWMPM_EXE +
+      " preprocess scene.json -o " + (mnt / "second").string() + " -q 2> err2.txt; echo $? > status2.txt; " +
+      "ls -A " + mnt.string() + " > listing.txt; rm " + (mnt / "filler").string() + "; cp -a " +
+      (mnt / "run").string() + " " + kept.string();
+  const int raw = std::system(("unshare -m sh -c '" + script + "' 2> " + (dir / "unshare.txt").string()).c_str());
+  if (WEXITSTATUS(raw) != 0 && !fs::exists(dir / "status.txt"))
+    GTEST_SKIP() << "cannot mount a tmpfs here: " << read_text((dir / "unshare.txt").string());
+  expect_failed_cleanly(kept, std::stoi(read_text((dir / "status.txt").string())), read_text((dir / "err.txt").string()),
+                        "No space left on device");
+  EXPECT_EQ(std::stoi(read_text((dir / "status2.txt").string())), 5) << read_text((dir / "err2.txt").string());
+  EXPECT_NE(read_text((dir / "err2.txt").string()).find("No space left on device"), std::string::npos);
+  EXPECT_EQ(read_text((dir / "listing.txt").string()), "filler\nrun\n") << "preprocess left nothing on the full disk";
+}
