@@ -16,6 +16,7 @@
 #include "scene/files.hpp"
 #include "scene/scene.hpp"
 #include "solver/element.hpp"
+#include "solver/output/checkpoint.hpp"
 #include "solver/run.hpp"
 #include "swmpm/version.hpp"
 
@@ -288,7 +289,9 @@ int main(int argc, char** argv) {
   solve->add_option("--threads", threads, "OpenMP threads (default: all cores); results do not depend on it")
       ->check(CLI::NonNegativeNumber);
   bool resume = false;
-  solve->add_flag("--resume", resume, "Continue from the last checkpoint (not implemented yet)");
+  solve->add_flag("--resume", resume,
+                  "Continue from the last checkpoint (RUN_DIR/checkpoint.bin), bit for bit as if the run had not "
+                  "stopped");
 
   auto* post = app.add_subcommand("postprocess", "Histories, profiles, comparisons, plots, reports");
   post->add_option("run_dir", run_dir, "Run directory")->required();
@@ -328,11 +331,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*solve) {
-      if (resume) {
-        std::cerr << "swmpm solve: --resume is not implemented yet in this version\n";
-        return 2;
-      }
-      return swmpm::solve(run_dir, {threads, quiet});
+      return swmpm::solve(run_dir, {threads, quiet, resume});
     }
     if (*post) return postprocess_command(run_dir, post_args, quiet);
     if (*run) {
@@ -344,6 +343,9 @@ int main(int argc, char** argv) {
     if (*element) return element_command(swmpm::scene::load_scene(scene_path), el, quiet);
   } catch (const swmpm::scene::SceneError& e) {
     for (const auto& line : e.lines()) std::cerr << line << "\n";
+    return 2;
+  } catch (const swmpm::CheckpointError& e) {
+    std::cerr << "swmpm solve: " << e.what() << "\n";
     return 2;
   } catch (const swmpm::files::RunDirectoryError& e) {
     std::cerr << "swmpm: " << e.what() << "\n";

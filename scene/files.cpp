@@ -119,6 +119,16 @@ CheckedFile::CheckedFile(const fs::path& path) : path_(path), file_(std::fopen(p
   if (!file_) throw WriteError(path, reason(errno));
 }
 
+CheckedFile::CheckedFile(const fs::path& path, std::size_t keep) : path_(path), size_(keep) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) throw WriteError(path, reason(errno));
+  if (::ftruncate(fd, static_cast<off_t>(keep)) != 0 || ::lseek(fd, 0, SEEK_END) < 0 || !(file_ = ::fdopen(fd, "a"))) {
+    const int err = errno;
+    ::close(fd);
+    throw WriteError(path, reason(err));
+  }
+}
+
 CheckedFile::~CheckedFile() {
   if (file_) std::fclose(file_);
 }

@@ -55,6 +55,8 @@ class CheckedFile {
  public:
   CheckedFile() = default;
   explicit CheckedFile(const fs::path& path);  // creates or truncates
+  /// Opens an existing file cut to its first `keep` bytes, to append to (a resumed run).
+  CheckedFile(const fs::path& path, std::size_t keep);
   ~CheckedFile();
   CheckedFile(const CheckedFile&) = delete;
   CheckedFile& operator=(const CheckedFile&) = delete;
@@ -64,6 +66,7 @@ class CheckedFile {
   void write(const std::string& text);  // appended and flushed to the system
   const fs::path& path() const { return path_; }
   bool is_open() const { return file_ != nullptr; }
+  std::size_t size() const { return size_; }  // bytes in the file
 
  private:
   fs::path path_;

@@ -999,6 +999,11 @@ const Table& output_table() {
                       "such as ParaView read it, some standalone readers do not) or `none` (fastest, files about "
                       "2.3 times zlib's). B4 12^2 double-point frame (172k points): 0.34 / 0.048 / 0.035 s "
                       "(docs/verification.md)."},
+          {.name = "checkpoint_interval", .range = positive, .unit = "s",
+           .meaning = "Simulated time between restart checkpoints on disk (`RUN_DIR/checkpoint.bin`, the latest "
+                      "only), from which `swmpm solve RUN_DIR --resume` continues; absent: one with every frame. "
+                      "Not `solver.checkpoint_every`, the in-memory last-good snapshots.",
+           .default_text = "with every frame"},
           {.name = "monitors", .type = Type::objects, .def = json::array(),
            .meaning = "Time histories, see [monitor](#monitor)."},
       }};
@@ -2043,6 +2048,7 @@ class SceneParser {
     s_.output.interval = o.num("interval");
     s_.output.monitor_interval = o.num("monitor_interval");
     s_.output.compression = o.str("compression", "zlib");
+    if (o.ok("checkpoint_interval")) s_.output.checkpoint_interval = o.num("checkpoint_interval");
     if (!o.ok("monitors")) return;
     const json& arr = o.get("monitors");
     std::map<std::string, std::string> first;
@@ -2496,6 +2502,7 @@ nlohmann::json to_json(const Scene& s) {
                  {"monitor_interval", s.output.monitor_interval},
                  {"compression", s.output.compression},
                  {"monitors", monitors}};
+  if (s.output.checkpoint_interval) j["output"]["checkpoint_interval"] = *s.output.checkpoint_interval;
 
   const Solver& sv = s.solver;
   j["solver"] = {{"flip", sv.flip},

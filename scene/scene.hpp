@@ -149,6 +149,7 @@ struct Output {
   double interval = 0.0;          // s between VTU frames (0: first and last only)
   double monitor_interval = 0.0;  // s between monitor rows (0: every step)
   std::string compression = "zlib";  // VTU frames: zlib (level 1) | lz4 | none
+  std::optional<double> checkpoint_interval;  // s between restart checkpoints on disk; empty: with every frame
   std::vector<Monitor> monitors;
 };
 

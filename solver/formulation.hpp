@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "scene/scene.hpp"
+#include "solver/output/checkpoint.hpp"
 #include "solver/particles/particles.hpp"
 
 namespace swmpm {
@@ -102,6 +103,15 @@ class Formulation {
     std::string unit;
   };
   virtual std::vector<Counter> counters() const { return {}; }
+  /// Restart (solver/output/checkpoint.hpp): what a step carries to the next beyond the particle
+  /// sets (the schedule order the next reordering reads, a linear solver's reused factor, counters),
+  /// so that a resumed run continues bit for bit. restore() is called on a formulation built from
+  /// the run's initial particles, after set_initialisation has been replayed as the run went
+  /// (what it derives — damping, permeability, plastic flags, Nor-Sand's memory of an elastic
+  /// phase — is then as it was) and after the checkpoint's particle sets are in `s`; it regroups
+  /// whatever indexes the particles.
+  virtual void save(Checkpoint& c) const = 0;
+  virtual void restore(const Checkpoint& c, State<Dim>& s) = 0;
 
  protected:
   StageTimes times_;

@@ -23,6 +23,7 @@
 #include "solver/formulation.hpp"
 #include "solver/formulations/registry.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/output/checkpoint.hpp"
 #include "solver/output/monitors.hpp"
 #include "solver/output/particle_io.hpp"
 #include "swmpm/version.hpp"
@@ -41,6 +42,11 @@ class Log {
  public:
   explicit Log(bool quiet) : quiet_(quiet) {}
   void open(const fs::path& path) { file_ = files::CheckedFile(path); }
+  void open_to_append(const fs::path& path) {
+    std::error_code ec;
+    const auto size = fs::file_size(path, ec);
+    file_ = ec ? files::CheckedFile(path) : files::CheckedFile(path, static_cast<std::size_t>(size));
+  }
   void line(const std::string& s) {
     if (!quiet_) std::cout << s << std::endl;
     to_file(s);
@@ -74,6 +80,7 @@ class Log {
 /// ledger) and keeps preprocess's scene.json and particles/.
 bool solve_output(const std::string& relative) {
   return relative == "run.json" || relative == "log.txt" || relative == "monitors.csv" || relative == "report.md" ||
+         relative == "checkpoint.bin" ||
          relative.rfind("output/", 0) == 0 || relative.rfind("plots/", 0) == 0;
 }
 
@@ -144,9 +151,25 @@ class Runner {
     compression_ = scene::vtu_compression(scene_.output.compression);
     threads_ = omp_get_max_threads();
 
+    // --resume: the checkpoint must be this scene's and this version's; checked before anything
+    // is written.
+    std::optional<Checkpoint> resume;
+    if (opt_.resume) resume = read_checkpoint(formulation->name());
+
     // The run directory: an earlier solve's files give way (only those swmpm wrote), a file of a
-    // name the solve writes that swmpm did not write stops it before anything is written.
-    run_dir_.remove_owned(solve_output);
+    // name the solve writes that swmpm did not write stops it before anything is written. A
+    // resumed run keeps what the checkpoint covers and removes the frames written after it.
+    if (resume) {
+      const int frames_kept = resume->header.at("loop").at("frame_count");
+      run_dir_.remove_owned([&](const std::string& rel) {
+        int k = -1;
+        return (std::sscanf(rel.c_str(), "output/solid_%d.vtu", &k) == 1 ||
+                std::sscanf(rel.c_str(), "output/fluid_%d.vtu", &k) == 1) &&
+               k >= frames_kept;
+      });
+    } else {
+      run_dir_.remove_owned(solve_output);
+    }
     const auto foreign = run_dir_.foreign(files::swmpm_files_in(dir_));
     for (const auto& f : foreign)
       if (solve_output(f))
@@ -154,13 +177,16 @@ class Runner {
                                        " exists and swmpm did not write it; swmpm never replaces or removes a file it "
                                        "did not write: move it away");
     run_dir_.claim("log.txt");
-    log_.open(dir_ / "log.txt");
+    if (resume) log_.open_to_append(dir_ / "log.txt");
+    else log_.open(dir_ / "log.txt");
     run_dir_.write_text("run.json", running_report(formulation->name()), true);
     run_dir_.claim("monitors.csv");
     std::filesystem::create_directories(dir_ / "output");
     const std::string stamp = "# swmpm " + std::string(version) + " (" + git_hash + "), scene " + scene_.name +
                               ", formulation " + formulation->name();
-    Monitors<Dim> monitors(scene_, state_, dir_ / "monitors.csv", stamp);
+    std::optional<std::size_t> monitor_bytes;
+    if (resume) monitor_bytes = resume->header.at("loop").at("monitor_bytes").get<std::size_t>();
+    Monitors<Dim> monitors(scene_, state_, dir_ / "monitors.csv", stamp, monitor_bytes);
 
     log_.line("swmpm " + std::string(version) + " (" + git_hash + ") solving " + scene_.name + ": " +
               formulation->name() + ", " + std::to_string(Dim) + "D, " + scene::to_string(scene_.grid.shape_function) +
@@ -189,7 +215,8 @@ class Runner {
     const scene::Initialisation& init = scene_.initialisation;
     const double t_start = init.enabled() ? -init.duration : 0.0;  // the initialisation runs before t = 0
     const double eps_t = 1e-12 * (end - t_start);
-    bool initialising = init.enabled();
+    bool& initialising = loop_.initialising;
+    initialising = init.enabled();
     state_.time = t_start;
     if (initialising) {
       formulation->set_initialisation(state_, &init);
@@ -201,8 +228,8 @@ class Runner {
       if (state_.fluid.size() && init.tie_water) os << ", water points tied to their soil points";
       log_.line(os.str());
     }
-    double next_frame = 0.0, next_monitor = 0.0, work = 0.0;
-    double dt_min = std::numeric_limits<double>::max(), dt_max = 0.0, dt = 0.0;
+    double &next_frame = loop_.next_frame, &next_monitor = loop_.next_monitor, &work = loop_.work;
+    double &dt_min = loop_.dt_min, &dt_max = loop_.dt_max, dt = 0.0;
     ParticleSet<Dim> last_good, last_good_water;
     last_good.copy_state_from(state_.solid);
     last_good_water.copy_state_from(state_.fluid);
@@ -214,11 +241,14 @@ class Runner {
 
     // A write that fails (a full disk, a file size limit, a removed folder) stops the run with
     // status `failed`: the frames before it are complete, results.pvd lists them, run.json says why.
+    long first_step = 0;  // the step this invocation started from (a resumed run's checkpoint)
     try {
-    write_frame(t_start);
-    next_frame = scene_.output.interval > 0 ? t_start + scene_.output.interval : end;
-    monitors.record(state_, *formulation, work);
-    next_monitor = t_start + scene_.output.monitor_interval;
+    if (!resume) {
+      write_frame(t_start);
+      next_frame = scene_.output.interval > 0 ? t_start + scene_.output.interval : end;
+      monitors.record(state_, *formulation, work);
+      next_monitor = t_start + scene_.output.monitor_interval;
+    }
 
     // Energy check: kinetic + stored energy can grow only by the work of gravity and loads
     // (damping, drag and plasticity dissipate). A step that creates energy many times over is an
@@ -231,10 +261,24 @@ class Runner {
     // conserved only up to the integration error of that exchange, so the largest release so far
     // is allowed on top (B5's slope undamped, first steps: 0.029 J kinetic, -0.028 J stored, sum
     // 2.6e-4 J, initial energy and work 0). A blow-up grows past any such bound.
-    const double stored0 = formulation->strain_energy(state_);
-    const double energy0 = formulation->kinetic_energy(state_) + stored0;
-    double work_max = 0.0, released_max = 0.0;
-    double power = formulation->external_power(state_, StepContext{0.0, 0.0, gravity_at(t_start)});
+    double &stored0 = loop_.stored0, &energy0 = loop_.energy0;
+    double &work_max = loop_.work_max, &released_max = loop_.released_max, &power = loop_.power;
+    double& time_carry = loop_.time_carry;  // Kahan compensation of state_.time
+    if (!resume) {
+      stored0 = formulation->strain_energy(state_);
+      energy0 = formulation->kinetic_energy(state_) + stored0;
+      power = formulation->external_power(state_, StepContext{0.0, 0.0, gravity_at(t_start)});
+      loop_.next_restart = t_start + restart_interval();
+    } else {
+      restore(*resume, *formulation);
+      last_good.copy_state_from(state_.solid);  // the checkpoint is a good state
+      last_good_water.copy_state_from(state_.fluid);
+      last_good_time = state_.time;
+      scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);  // without the frames after it
+      log_.line("resumed from the checkpoint at step " + std::to_string(state_.step) + ", t = " + fmt(state_.time, 10) +
+                " s (" + std::to_string(loop_.frame_count) + " frames kept)");
+    }
+    first_step = state_.step;
     auto energy_created = [&]() -> bool {
       const double stored = formulation->strain_energy(state_);
       const double e = formulation->kinetic_energy(state_) + stored;
@@ -251,7 +295,7 @@ class Runner {
     };
 
     const bool monitors_read_output_fields = monitors.reads_output_fields();
-    double time_carry = 0.0;  // Kahan compensation of state_.time
+    if (!resume) write_checkpoint(*formulation, monitors);  // a run killed before its first frame resumes from t = 0
     while (state_.time < end - eps_t) {
       if (g_interrupted) {
         status = "interrupted";
@@ -320,8 +364,11 @@ class Runner {
         break;
       }
       const bool monitor_due = state_.time >= next_monitor - eps_t || phase_ended;
-      if (checkpoint || frame_due || (monitor_due && monitors_read_output_fields))
-        formulation->complete_output_fields(state_, checkpoint || frame_due);
+      // Restart checkpoints on disk: every output.checkpoint_interval, or with every frame.
+      const bool restart_due = state_.time < end - eps_t &&
+                               (scene_.output.checkpoint_interval ? state_.time >= loop_.next_restart - eps_t : frame_due);
+      if (checkpoint || frame_due || restart_due || (monitor_due && monitors_read_output_fields))
+        formulation->complete_output_fields(state_, checkpoint || frame_due || restart_due);
       if (checkpoint) {
         last_good.copy_state_from(state_.solid);  // reuses capacity: no allocation after the first copy
         last_good_water.copy_state_from(state_.fluid);
@@ -339,6 +386,10 @@ class Runner {
           while (next_frame <= state_.time + eps_t) next_frame += scene_.output.interval;
         else
           next_frame = end;
+      }
+      if (restart_due) {
+        while (loop_.next_restart <= state_.time + eps_t) loop_.next_restart += restart_interval();
+        write_checkpoint(*formulation, monitors);
       }
       if (tty) {
         const auto now = std::chrono::steady_clock::now();
@@ -394,10 +445,12 @@ class Runner {
     // figure (no input; frame writing included, frame_seconds says how much) is what the
     // benchmarks compare (they write the first and last frames only).
     // Points of both sets count (double-point: soil and water points, as the paper counts them).
+    // A resumed run counts the steps it made itself.
+    const long steps_here = state_.step - first_step;
     const double particle_steps =
-        static_cast<double>(state_.solid.size() + state_.fluid.size()) * static_cast<double>(state_.step);
-    const double us_pps = state_.step > 0 ? 1e6 * wall / particle_steps : 0.0;
-    const double loop_us_pps = state_.step > 0 ? 1e6 * loop_wall / particle_steps : 0.0;
+        static_cast<double>(state_.solid.size() + state_.fluid.size()) * static_cast<double>(steps_here);
+    const double us_pps = steps_here > 0 ? 1e6 * wall / particle_steps : 0.0;
+    const double loop_us_pps = steps_here > 0 ? 1e6 * loop_wall / particle_steps : 0.0;
 
     nlohmann::ordered_json rj;
     rj["status"] = status;
@@ -409,6 +462,10 @@ class Runner {
     if (state_.fluid.size()) rj["particles"]["fluid"] = state_.fluid.size();
     rj["active_cells"] = formulation->active_cells(state_);
     rj["steps"] = state_.step;
+    if (resume) {
+      rj["resumed_from_step"] = first_step;
+      rj["resumed_from_time"] = resume->header.at("time");
+    }
     rj["dt"] = auto_dt ? (state_.step ? state_.time / static_cast<double>(state_.step) : 0.0) : *scene_.time.dt;  // mean for "auto"
     rj["dt_min"] = state_.step ? dt_min : 0.0;
     rj["dt_max"] = dt_max;
@@ -417,6 +474,8 @@ class Runner {
     rj["wall_seconds"] = wall;
     rj["loop_seconds"] = loop_wall;
     rj["frame_seconds"] = frame_seconds_;
+    rj["checkpoints"] = checkpoints_;
+    rj["checkpoint_seconds"] = checkpoint_seconds_;  // part of loop_seconds
     rj["threads"] = threads_;
     rj["us_per_particle_step"] = us_pps;
     rj["loop_us_per_particle_step"] = loop_us_pps;
@@ -464,6 +523,113 @@ class Runner {
   }
 
  private:
+  /// The time loop's own state between steps (what a checkpoint holds besides the particles and
+  /// the formulation's state).
+  struct Loop {
+    bool initialising = false;
+    double next_frame = 0.0, next_monitor = 0.0, next_restart = 0.0;  // s
+    double work = 0.0, power = 0.0;  // J, W: external work so far, power at the current state
+    double stored0 = 0.0, energy0 = 0.0, work_max = 0.0, released_max = 0.0;  // J: the energy check
+    double dt_min = std::numeric_limits<double>::max(), dt_max = 0.0;        // s
+    double time_carry = 0.0;  // Kahan compensation of the time
+    int frame_count = 0;
+  };
+
+  double restart_interval() const {
+    return scene_.output.checkpoint_interval ? *scene_.output.checkpoint_interval : scene_.time.end;
+  }
+
+  static std::string scene_text(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }
+
+  /// RUN_DIR/checkpoint.bin (solver/output/checkpoint.hpp), replaced atomically.
+  void write_checkpoint(const Formulation<Dim>& f, const Monitors<Dim>& monitors) {
+    const auto start = std::chrono::steady_clock::now();
+    Checkpoint c;
+    c.header["software_version"] = version;
+    c.header["git_hash"] = git_hash;
+    c.header["formulation"] = f.name();
+    c.header["dimension"] = Dim;
+    c.header["step"] = state_.step;
+    c.header["time"] = state_.time;
+    c.header["scene"] = scene_text(dir_ / "scene.json");
+    loop_.frame_count = frame_count_;
+    nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+    for (const auto& e : frames_) frames.push_back({e.time, e.group, e.part, e.file});
+    c.header["loop"] = {{"initialising", loop_.initialising}, {"next_frame", loop_.next_frame},
+                        {"next_monitor", loop_.next_monitor}, {"next_restart", loop_.next_restart},
+                        {"work", loop_.work},                 {"power", loop_.power},
+                        {"stored0", loop_.stored0},           {"energy0", loop_.energy0},
+                        {"work_max", loop_.work_max},         {"released_max", loop_.released_max},
+                        {"dt_min", loop_.dt_min},             {"dt_max", loop_.dt_max},
+                        {"time_carry", loop_.time_carry},     {"frame_count", loop_.frame_count},
+                        {"frames", frames},                   {"monitor_bytes", monitors.bytes()}};
+    save_set(c, "solid", state_.solid);
+    save_set(c, "fluid", state_.fluid);
+    f.save(c);
+    run_dir_.claim("checkpoint.bin");
+    c.write(dir_ / "checkpoint.bin");
+    checkpoint_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ++checkpoints_;
+  }
+
+  /// The checkpoint to resume from, refused (CheckpointError, exit 2) when another version wrote
+  /// it or the scene changed since: the message says what differs.
+  Checkpoint read_checkpoint(const std::string& formulation) const {
+    const fs::path file = dir_ / "checkpoint.bin";
+    Checkpoint c = Checkpoint::read(file);
+    const std::string theirs = c.header.value("software_version", "?") + " (" + c.header.value("git_hash", "?") + ")";
+    const std::string ours = std::string(version) + " (" + git_hash + ")";
+    if (theirs != ours)
+      throw CheckpointError(file.string() + ": written by swmpm " + theirs + ", this is swmpm " + ours +
+                            "; a checkpoint resumes only with the version that wrote it (run the solve again "
+                            "without --resume)");
+    const std::string now = scene_text(dir_ / "scene.json"), then = c.header.value("scene", "");
+    if (now != then) {
+      std::string paths;
+      try {
+        for (const auto& d : nlohmann::json::diff(nlohmann::json::parse(then), nlohmann::json::parse(now)))
+          paths += (paths.empty() ? "" : ", ") + d.value("path", std::string("?"));
+      } catch (const std::exception&) {
+        paths = "the file";
+      }
+      throw CheckpointError(file.string() + ": the scene changed since the checkpoint (" + paths + " in " +
+                            (dir_ / "scene.json").string() +
+                            "); resume the scene it was written for, or run the solve again without --resume");
+    }
+    if (c.header.value("formulation", "") != formulation || c.header.value("dimension", 0) != Dim)
+      throw CheckpointError(file.string() + ": written by formulation " + c.header.value("formulation", "?") +
+                            ", the scene's is " + formulation);
+    return c;
+  }
+
+  /// Puts the checkpoint's state in place of the run's initial one: the formulation (built from
+  /// the initial particles) gets the initialisation phase as it then was, the particle sets, the
+  /// time loop's state and its own.
+  void restore(const Checkpoint& c, Formulation<Dim>& f) {
+    const auto& l = c.header.at("loop");
+    const bool initialising = l.at("initialising");
+    if (!initialising && scene_.initialisation.enabled()) f.set_initialisation(state_, nullptr);
+    restore_set(c, "solid", state_.solid);
+    restore_set(c, "fluid", state_.fluid);
+    state_.index_ids();
+    state_.step = c.header.at("step");
+    state_.time = c.header.at("time");
+    loop_.initialising = initialising;
+    loop_.next_frame = l.at("next_frame"), loop_.next_monitor = l.at("next_monitor");
+    loop_.next_restart = l.at("next_restart"), loop_.work = l.at("work"), loop_.power = l.at("power");
+    loop_.stored0 = l.at("stored0"), loop_.energy0 = l.at("energy0"), loop_.work_max = l.at("work_max");
+    loop_.released_max = l.at("released_max"), loop_.dt_min = l.at("dt_min"), loop_.dt_max = l.at("dt_max");
+    loop_.time_carry = l.at("time_carry");
+    frame_count_ = loop_.frame_count = l.at("frame_count");
+    frames_.clear();
+    for (const auto& e : l.at("frames"))
+      frames_.push_back({e.at(0).get<double>(), e.at(1).get<std::string>(), e.at(2).get<int>(), e.at(3).get<std::string>()});
+    f.restore(c, state_);
+  }
+
   /// The final run.json, replacing the `running` one. On a full disk, the padded `running` file
   /// is overwritten in place (no new block needed); if even that fails, stderr says so.
   void write_run_report(const std::string& text, std::string& status) {
@@ -566,7 +732,10 @@ class Runner {
   std::vector<std::unique_ptr<MaterialModel<Dim>>> reporters_;  // per scene material, for add_material_reports
   scene::VtuCompression compression_ = scene::VtuCompression::zlib;  // output.compression
   int frame_count_ = 0;
-  double frame_seconds_ = 0.0;  // wall time spent writing frames (part of loop_seconds)
+  Loop loop_;
+  double frame_seconds_ = 0.0;
+  double checkpoint_seconds_ = 0.0;  // wall time spent writing restart checkpoints (part of loop_seconds)
+  int checkpoints_ = 0;  // wall time spent writing frames (part of loop_seconds)
   double last_good_frame_time_ = 0.0;
 };
 

@@ -8,6 +8,7 @@ namespace swmpm {
 struct SolveOptions {
   int threads = 0;     // 0: all cores
   bool quiet = false;  // no terminal output (log.txt is still written)
+  bool resume = false;  // continue from RUN_DIR/checkpoint.bin (--resume)
 };
 
 /// Runs the formulation of RUN_DIR/scene.json on RUN_DIR/particles/*.vtu and writes output/,

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "solver/grid/grid.hpp"
+#include "solver/output/checkpoint.hpp"
 #include "solver/shape/shape.hpp"
 
 namespace swmpm {
@@ -204,6 +205,7 @@ class PressurePoisson {
     } else {
       solver_.factorize(A_);
       if (solver_.info() != Eigen::Success) return false;
+      factor_values_.assign(values, values + nnz);  // what a restart factorises again
       factored_ = true;
       age_ = 0;
       ++factorisations_;
@@ -213,6 +215,69 @@ class PressurePoisson {
     for (int j = 0; j < n; ++j)
       if (role_[equations_[j]] == unknown) dp_[equations_[j]] = x_[j];
     return true;
+  }
+
+  /// Restart: what a solve carries to the next — the equations and their pattern (kept while the
+  /// nodes' roles allow), the sticky memory of formerly unknown nodes, and the factor reused as a
+  /// preconditioner, stored as the matrix it was computed from and factorised again on restore
+  /// (CHOLMOD's analysis and factorisation depend on the pattern and values only). The rows,
+  /// right-hand sides and roles are rebuilt by every step (clear() zeroes what a step wrote).
+  void save(Checkpoint& c, const std::string& k) const {
+    c.header[k] = {{"solves", solves_},       {"analysed", analysed_},   {"factored", factored_},
+                   {"age", age_},             {"pattern_builds", pattern_builds_},
+                   {"factorisations", factorisations_}, {"cg_iterations", cg_iterations_},
+                   {"rows", A_.rows()}};
+    c.put(k + "/equations", equations_);
+    c.put(k + "/pattern_nodes", pattern_nodes_);
+    c.put(k + "/member", member_);
+    c.put(k + "/last_unknown", last_unknown_);
+    c.put(k + "/gather", gather_);
+    c.put(k + "/entry_node", entry_node_);
+    c.put(k + "/outer", std::vector<int>(A_.outerIndexPtr(), A_.outerIndexPtr() + A_.outerSize() + 1));
+    c.put(k + "/inner", std::vector<int>(A_.innerIndexPtr(), A_.innerIndexPtr() + A_.nonZeros()));
+    c.put(k + "/values", std::vector<double>(A_.valuePtr(), A_.valuePtr() + A_.nonZeros()));
+    c.put(k + "/factor_values", factor_values_);
+    std::vector<int> box(2 * Dim);
+    for (int a = 0; a < Dim; ++a) box[a] = box_.lo[a], box[Dim + a] = box_.hi[a];
+    c.put(k + "/box", box);
+  }
+  void restore(const Checkpoint& c, const std::string& k) {
+    const auto& h = c.header.at(k);
+    solves_ = h.at("solves");
+    age_ = h.at("age");
+    pattern_builds_ = h.at("pattern_builds");
+    factorisations_ = h.at("factorisations");
+    cg_iterations_ = h.at("cg_iterations");
+    c.get(k + "/equations", equations_);
+    c.get(k + "/pattern_nodes", pattern_nodes_);
+    c.get(k + "/member", member_);
+    c.get(k + "/last_unknown", last_unknown_);
+    c.get(k + "/gather", gather_);
+    c.get(k + "/entry_node", entry_node_);
+    std::vector<int> outer, inner, box;
+    std::vector<double> values;
+    c.get(k + "/outer", outer);
+    c.get(k + "/inner", inner);
+    c.get(k + "/values", values);
+    c.get(k + "/factor_values", factor_values_);
+    c.get(k + "/box", box);
+    for (int a = 0; a < Dim; ++a) box_.lo[a] = box[a], box_.hi[a] = box[Dim + a];
+    const Eigen::Index n = h.at("rows");
+    A_.resize(n, n);
+    A_.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
+    std::copy(outer.begin(), outer.end(), A_.outerIndexPtr());
+    std::copy(inner.begin(), inner.end(), A_.innerIndexPtr());
+    analysed_ = factored_ = false;
+    if (h.at("analysed").get<bool>() && n > 0) {
+      solver_.analyzePattern(A_);
+      analysed_ = true;
+      if (h.at("factored").get<bool>()) {
+        std::copy(factor_values_.begin(), factor_values_.end(), A_.valuePtr());
+        solver_.factorize(A_);
+        factored_ = solver_.info() == Eigen::Success;
+      }
+    }
+    std::copy(values.begin(), values.end(), A_.valuePtr());
   }
 
   /// The increment at node i (after solve).
@@ -322,6 +387,7 @@ class PressurePoisson {
   Eigen::SparseMatrix<double> A_;
   Eigen::VectorXd b_, x_, r_, z_, d_, q_;  // right-hand side, solution, CG work vectors
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
+  std::vector<double> factor_values_;  // A_'s values when it was last factorised
   bool analysed_ = false, factored_ = false;
   int age_ = 0;  // steps since the last factorisation
   long pattern_builds_ = 0, factorisations_ = 0, cg_iterations_ = 0;

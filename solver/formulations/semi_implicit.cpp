@@ -454,6 +454,30 @@ class SemiImplicit final : public Formulation<Dim> {
       partner_ = coincident_soil_points(st);
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
+  // Restart: what a step carries to the next beyond the particles — the schedule orders the next
+  // reordering reads, the pressure solver's equations and reused factor, the initialisation's
+  // water-point partners, and the escaped-water totals. The output-only fields are complete in a
+  // checkpoint (the loop completes them first), so nothing is stale after a restore.
+  void save(Checkpoint& c) const override {
+    c.put("formulation/schedule_order", schedule_.order());
+    c.put("formulation/water_schedule_order", wschedule_.order());
+    c.put("formulation/partner", partner_);
+    c.header["formulation_state"] = {{"escaped_points", escaped_points_}, {"escaped_mass", escaped_mass_}};
+    poisson_.save(c, "formulation/poisson");
+  }
+  void restore(const Checkpoint& c, State<Dim>& st) override {
+    regroup_by_material(st.solid, material_particles_);  // the checkpoint's particle order
+    std::vector<int> order;
+    c.get("formulation/schedule_order", order);
+    schedule_.restore_order(std::move(order));
+    c.get("formulation/water_schedule_order", order);
+    wschedule_.restore_order(std::move(order));
+    c.get("formulation/partner", partner_);
+    escaped_points_ = c.header.at("formulation_state").at("escaped_points");
+    escaped_mass_ = c.header.at("formulation_state").at("escaped_mass");
+    output_fields_stale_ = water_output_stale_ = false;
+    poisson_.restore(c, "formulation/poisson");
+  }
 
  private:
   enum class Remap { none, node, linear };

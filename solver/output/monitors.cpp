@@ -9,8 +9,7 @@ namespace swmpm {
 
 template <int Dim>
 Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::filesystem::path& path,
-                        const std::string& header_comment)
-    : out_(path) {
+                        const std::string& header_comment, std::optional<std::size_t> resume_bytes) {
   const auto& ps = st.solid;
   std::ostringstream header;
   header << "time";
@@ -73,7 +72,12 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
       header << "," << mon.name << "." << qn;
     }
   }
-  out_.write(header_comment + "\n" + header.str() + "\n");
+  if (resume_bytes) {
+    out_ = files::CheckedFile(path, *resume_bytes);  // the rows up to the checkpoint, then this run's
+  } else {
+    out_ = files::CheckedFile(path);
+    out_.write(header_comment + "\n" + header.str() + "\n");
+  }
   row_ << std::setprecision(10);
 }
 

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -18,8 +19,12 @@ namespace swmpm {
 template <int Dim>
 class Monitors {
  public:
+  /// `st` is the run's initial state (the particles monitors follow are chosen at t = 0); with
+  /// `resume_bytes` the file is kept to that length and appended to (a resumed run).
   Monitors(const scene::Scene& s, const State<Dim>& st, const std::filesystem::path& path,
-           const std::string& header_comment);
+           const std::string& header_comment, std::optional<std::size_t> resume_bytes = std::nullopt);
+  /// Bytes written to monitors.csv so far (a checkpoint records it).
+  std::size_t bytes() const { return out_.size(); }
   /// Appends one row at the state's time.
   void record(const State<Dim>& st, const Formulation<Dim>& f, double external_work);
   /// Whether a column reads a field a formulation may fill only for output (pore pressure, water

@@ -62,6 +62,9 @@ class StripeSchedule {
 
   /// Particle indices in schedule order (stripe by stripe, increasing index inside a stripe).
   const std::vector<int>& order() const { return order_; }
+  /// Restart: the order of the step before a checkpoint, which the next step's reordering reads
+  /// (the stripes themselves are rebuilt by every step before they are used).
+  void restore_order(std::vector<int> order) { order_ = std::move(order); }
   /// Whether the particles are already stored in schedule order.
   bool in_order() const {
     for (std::size_t k = 0; k < order_.size(); ++k)
