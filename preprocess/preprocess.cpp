@@ -295,6 +295,21 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
       if (s.materials[k].model != scene::MaterialModel::fluid && s.materials[k].permeability_law != "constant")
         reject("/materials/" + std::to_string(k) + "/permeability_law: \"" + s.materials[k].permeability_law +
                "\" is not implemented in explicit-single-point yet (constant permeability only)");
+  // Pressure stabilisations each formulation has (the parser knows the union of them all).
+  const std::string& pressure = s.solver.stabilisation.pressure;
+  const bool semi_implicit = s.formulation == scene::Formulation::semi_implicit_single_point ||
+                             s.formulation == scene::Formulation::semi_implicit_double_point;
+  if (s.formulation == scene::Formulation::explicit_single_point && pressure == "node-remap")
+    reject("/solver/stabilisation/pressure: got \"node-remap\", which belongs to the semi-implicit formulations; "
+           "expected one of none, mfvp-constant, mfvp-linear, mfvp-quadratic, cell-constant");
+  if (semi_implicit && pressure != "node-remap" && pressure != "mfvp-linear" && pressure != "none")
+    reject("/solver/stabilisation/pressure: got \"" + pressure + "\", which " + scene::to_string(s.formulation) +
+           " does not have; expected one of node-remap, mfvp-linear, none");
+  // Nor-Sand is a finite-strain model (Borja & Andrade 2006).
+  for (std::size_t k = 0; k < s.materials.size(); ++k)
+    if (s.materials[k].model == scene::MaterialModel::nor_sand && s.solver.kinematics != "finite-strain")
+      reject("/solver/kinematics: got \"" + s.solver.kinematics + "\", but material \"" + s.materials[k].name +
+             "\" is nor-sand, a finite-strain model; expected \"finite-strain\"");
   std::ifstream in(scene_path);
   const auto raw = nlohmann::json::parse(in, nullptr, false);
   if (raw.is_discarded() || !raw.contains("solver")) return;
@@ -319,8 +334,8 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
     reject("/solver/stabilisation/pressure: the dry formulation has no pore pressure to stabilise (F-bar is "
            "solver.stabilisation.fbar); remove the key");
   if (solver.contains("kinematics") && !scene::reads_switch(s, "kinematics"))
-    reject("/solver/kinematics: the dry formulation's kinematics follow the material (linear-elastic: Jaumann rate, "
-           "hencky: finite strain; only mohr-coulomb and nor-sand read the switch); remove the key");
+    reject("/solver/kinematics: no material of the scene reads it (linear-elastic follows the Jaumann rate, hencky "
+           "is finite strain; only mohr-coulomb and nor-sand read the switch); remove the key");
 }
 
 /// The run directory preprocess writes: a folder that holds an earlier run is cleared (only the

@@ -1042,7 +1042,7 @@ const Table& solver_table() {
           {.name = "damping", .def = 0.0, .range = half_open(0, 1), .unit = "-",
            .meaning = "Local (Cundall) damping coefficient."},
           {.name = "kinematics", .type = Type::choice, .def = "finite-strain",
-           .values = {"small-strain", "finite-strain"}, .meaning = "Strain measure of the update."},
+           .values = {"small-strain", "finite-strain"}, .meaning = "Strain measure of the `mohr-coulomb` update (`nor-sand`: finite strain only); refused when no material reads it."},
           {.name = "continuity", .type = Type::choice,
            .values = {"non-conservative", "conservative"},
            .meaning = "Two-phase mixture volume balance: `non-conservative` (1 − n) div v_s + n div v_w "
@@ -2392,9 +2392,8 @@ bool reads_switch(const Scene& s, const std::string& key) {
   if (key == "pressure") return !dry;
   if (key == "fbar_patch") return s.solver.stabilisation.fbar == "modified";
   if (key == "kinematics") {
-    // mohr-coulomb and nor-sand read it (nor-sand: finite strain only); the dry formulation's
+    // mohr-coulomb and nor-sand read it (nor-sand: finite strain only), in every formulation; the
     // other models follow their own kinematics (linear-elastic: Jaumann rate, hencky: finite).
-    if (!dry) return true;
     for (const auto& m : s.materials)
       if (m.model == MaterialModel::mohr_coulomb || m.model == MaterialModel::nor_sand) return true;
     return false;

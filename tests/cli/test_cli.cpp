@@ -328,3 +328,23 @@ TEST(BadInput, PorePressureFaceThatNoWaterReachesIsRejected) {
   EXPECT_NE(r.err.find("boundaries/3/fluid"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("no water lies on \"y_max\""), std::string::npos) << r.err;
 }
+
+// Switches a formulation or material does not take are scene errors at preprocess (exit 2, the
+// JSON path, nothing written), not a late exit 1 from the solver (issue 23, item 4).
+TEST(BadInput, SwitchesNoMaterialOrFormulationReads) {
+  json si = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene.json");
+  si["solver"]["kinematics"] = "small-strain";  // linear-elastic only: nothing reads it
+  expect_rejected(si, "kinematics-unread", "/solver/kinematics", "no material of the scene reads it");
+
+  json esp = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi/scene.json");
+  esp["solver"]["stabilisation"]["pressure"] = "node-remap";
+  expect_rejected(esp, "node-remap-explicit", "/solver/stabilisation/pressure", "belongs to the semi-implicit");
+
+  json sic = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene.json");
+  sic["solver"]["stabilisation"]["pressure"] = "cell-constant";
+  expect_rejected(sic, "cell-constant-semi-implicit", "/solver/stabilisation/pressure", "expected one of node-remap");
+
+  json ns = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/landslide-nor-sand/scene-loose.json");
+  ns["solver"]["kinematics"] = "small-strain";
+  expect_rejected(ns, "nor-sand-small-strain", "/solver/kinematics", "is nor-sand, a finite-strain model");
+}
