@@ -295,7 +295,6 @@ class Runner {
     };
 
     const bool monitors_read_output_fields = monitors.reads_output_fields();
-    if (!resume) write_checkpoint(*formulation, monitors);  // a run killed before its first frame resumes from t = 0
     while (state_.time < end - eps_t) {
       if (g_interrupted) {
         status = "interrupted";
