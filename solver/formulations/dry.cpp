@@ -136,12 +136,10 @@ class Dry final : public Formulation<Dim> {
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
   // Restart: the last step's schedule order, which the next step's reordering (0) reads; every
   // other field is rebuilt by each step from the particles.
-  void save(Checkpoint& c) const override { c.put("formulation/schedule_order", schedule_.order()); }
+  void save(Checkpoint& c) const override { save_order(c, "formulation/schedule_order", schedule_); }
   void restore(const Checkpoint& c, State<Dim>& st) override {
     regroup_by_material(st.solid, material_particles_);  // the checkpoint's particle order
-    std::vector<int> order;
-    c.get("formulation/schedule_order", order);
-    schedule_.restore_order(std::move(order));
+    restore_order(c, "formulation/schedule_order", schedule_);
   }
 
  private:

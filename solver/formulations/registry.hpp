@@ -75,6 +75,17 @@ bool reorder_for_locality(State<Dim>& st, const StripeSchedule& schedule, Reorde
   return true;
 }
 
+/// Restart: the schedule order the next step's reordering reads (reorder_for_locality), saved and
+/// restored under `name`.
+inline void save_order(Checkpoint& c, const std::string& name, const StripeSchedule& schedule) {
+  c.put(name, schedule.order());
+}
+inline void restore_order(const Checkpoint& c, const std::string& name, StripeSchedule& schedule) {
+  std::vector<int> order;
+  c.get(name, order);
+  schedule.restore_order(std::move(order));
+}
+
 /// Cundall's local damping of a nodal force: f_a <- f_a - alpha |f_a| sign(v_a), per component.
 template <int Dim>
 inline Vec<Dim> local_damping(Vec<Dim> f, const Vec<Dim>& v, double alpha) {

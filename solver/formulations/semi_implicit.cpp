@@ -459,19 +459,16 @@ class SemiImplicit final : public Formulation<Dim> {
   // water-point partners, and the escaped-water totals. The output-only fields are complete in a
   // checkpoint (the loop completes them first), so nothing is stale after a restore.
   void save(Checkpoint& c) const override {
-    c.put("formulation/schedule_order", schedule_.order());
-    c.put("formulation/water_schedule_order", wschedule_.order());
+    save_order(c, "formulation/schedule_order", schedule_);
+    save_order(c, "formulation/water_schedule_order", wschedule_);
     c.put("formulation/partner", partner_);
     c.header["formulation_state"] = {{"escaped_points", escaped_points_}, {"escaped_mass", escaped_mass_}};
     poisson_.save(c, "formulation/poisson");
   }
   void restore(const Checkpoint& c, State<Dim>& st) override {
     regroup_by_material(st.solid, material_particles_);  // the checkpoint's particle order
-    std::vector<int> order;
-    c.get("formulation/schedule_order", order);
-    schedule_.restore_order(std::move(order));
-    c.get("formulation/water_schedule_order", order);
-    wschedule_.restore_order(std::move(order));
+    restore_order(c, "formulation/schedule_order", schedule_);
+    restore_order(c, "formulation/water_schedule_order", wschedule_);
     c.get("formulation/partner", partner_);
     escaped_points_ = c.header.at("formulation_state").at("escaped_points");
     escaped_mass_ = c.header.at("formulation_state").at("escaped_mass");
