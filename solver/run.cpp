@@ -124,6 +124,7 @@ class Runner {
   int run() {
     const auto wall_start = std::chrono::steady_clock::now();
     scene_ = scene::load_scene((dir_ / "scene.json").string());
+    scene_text_ = read_text(dir_ / "scene.json");  // what checkpoints record, read once
     const fs::path particles = dir_ / "particles" / "solid.vtu";
     state_.solid = particles_from_cloud<Dim>(scene::read_vtu(particles.string()), particles.string());
     if (needs_material_state(scene_)) state_.solid.add_material_state();
@@ -538,7 +539,7 @@ class Runner {
     return scene_.output.checkpoint_interval ? *scene_.output.checkpoint_interval : scene_.time.end;
   }
 
-  static std::string scene_text(const fs::path& file) {
+  static std::string read_text(const fs::path& file) {
     std::ifstream in(file, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(in), {});
   }
@@ -553,7 +554,7 @@ class Runner {
     c.header["dimension"] = Dim;
     c.header["step"] = state_.step;
     c.header["time"] = state_.time;
-    c.header["scene"] = scene_text(dir_ / "scene.json");
+    c.header["scene"] = scene_text_;
     loop_.frame_count = frame_count_;
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();
     for (const auto& e : frames_) frames.push_back({e.time, e.group, e.part, e.file});
@@ -585,7 +586,8 @@ class Runner {
       throw CheckpointError(file.string() + ": written by swmpm " + theirs + ", this is swmpm " + ours +
                             "; a checkpoint resumes only with the version that wrote it (run the solve again "
                             "without --resume)");
-    const std::string now = scene_text(dir_ / "scene.json"), then = c.header.value("scene", "");
+    const std::string& now = scene_text_;
+    const std::string then = c.header.value("scene", "");
     if (now != then) {
       std::string paths;
       try {
@@ -732,6 +734,7 @@ class Runner {
   scene::VtuCompression compression_ = scene::VtuCompression::zlib;  // output.compression
   int frame_count_ = 0;
   Loop loop_;
+  std::string scene_text_;  // RUN_DIR/scene.json as read at the start
   double frame_seconds_ = 0.0;
   double checkpoint_seconds_ = 0.0;  // wall time spent writing restart checkpoints (part of loop_seconds)
   int checkpoints_ = 0;  // wall time spent writing frames (part of loop_seconds)
