@@ -125,8 +125,12 @@ def cases(steps):
 
 
 def sha(path):
+    """SHA-256 of a file; monitors.csv without its comment lines (they name the build)."""
     with open(path, "rb") as f:
-        return hashlib.sha256(f.read()).hexdigest()
+        data = f.read()
+    if path.endswith(".csv"):
+        data = b"\n".join(l for l in data.split(b"\n") if not l.startswith(b"#"))
+    return hashlib.sha256(data).hexdigest()
 
 
 def record(a):
@@ -163,6 +167,48 @@ def record(a):
         json.dump(result, f, indent=1, sort_keys=True)
 
 
+def monitor_difference(dir_a, dir_b, name):
+    """Largest difference between the two runs' monitors.csv, relative to each column's largest
+    magnitude (a round-off change shows as ~1e-15..1e-12; a changed result as much more)."""
+    rows = []
+    for d in (dir_a, dir_b):
+        p = os.path.join(d, name, "run", "monitors.csv")
+        if not os.path.exists(p):
+            return ""
+        with open(p) as f:
+            lines = [l for l in f.read().splitlines() if l and not l.startswith("#")]
+        rows.append([l.split(",") for l in lines[1:]])
+    if len(rows[0]) != len(rows[1]) or not rows[0]:
+        return f" (monitors: {len(rows[0])} vs {len(rows[1])} rows)"
+    worst = 0.0
+    for c in range(len(rows[0][0])):
+        try:
+            x = [float(r[c]) for r in rows[0]]
+            y = [float(r[c]) for r in rows[1]]
+        except (ValueError, IndexError):
+            continue
+        scale = max(max(abs(v) for v in x), max(abs(v) for v in y))
+        if scale > 0:
+            worst = max(worst, max(abs(u - v) for u, v in zip(x, y)) / scale)
+    return f" (monitors: max relative difference {worst:.2e})"
+
+
+def frame_difference(dir_a, dir_b, name, files, tool):
+    """Largest relative difference over the differing frames (bench/frame_diff.cpp)."""
+    if not tool or not os.path.exists(tool):
+        return ""
+    worst = 0.0
+    for rel in files:
+        if not rel.endswith(".vtu"):
+            continue
+        pa, pb = (os.path.join(d, name, "run", rel) for d in (dir_a, dir_b))
+        if not (os.path.exists(pa) and os.path.exists(pb)):
+            return " (frames: missing)"
+        out = subprocess.run([tool, pa, pb], capture_output=True, text=True).stdout.split()
+        worst = max(worst, float(out[-1]) if out and out[-2] == "max_relative" else float("inf"))
+    return f" (frames: max relative difference {worst:.2e})"
+
+
 def compare(a):
     with open(os.path.join(a.a, "hashes.json")) as f:
         A = json.load(f)
@@ -183,7 +229,8 @@ def compare(a):
                 diffs.append(rel)
         if diffs:
             bad += 1
-            print(f"DIFFERS {name}: {', '.join(diffs[:6])}{' ...' if len(diffs) > 6 else ''}")
+            print(f"DIFFERS {name}: {', '.join(diffs[:6])}{' ...' if len(diffs) > 6 else ''}"
+                  f"{monitor_difference(a.a, a.b, name)}{frame_difference(a.a, a.b, name, diffs, a.frame_diff)}")
     print(f"{len(set(A) & set(B))} cases compared, {bad} differ")
     return 1 if bad else 0
 
@@ -200,6 +247,8 @@ def main():
     c = sub.add_parser("compare")
     c.add_argument("a")
     c.add_argument("b")
+    c.add_argument("--frame-diff", default=os.path.join(ROOT, "build", "bench", "frame_diff"),
+                   help="the frame_diff tool (built with the project) that measures differing frames")
     a = ap.parse_args()
     if a.cmd == "record":
         record(a)

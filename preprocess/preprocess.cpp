@@ -290,11 +290,6 @@ namespace {
 void reject_unused_switches(const std::string& scene_path, const scene::Scene& s) {
   // A scene error (exit 2, one line naming the file and the JSON pointer), like the parser's.
   const auto reject = [&](const std::string& line) { throw scene::SceneError({scene_path + ": " + line}); };
-  if (s.formulation == scene::Formulation::explicit_single_point)
-    for (std::size_t k = 0; k < s.materials.size(); ++k)
-      if (s.materials[k].model != scene::MaterialModel::fluid && s.materials[k].permeability_law != "constant")
-        reject("/materials/" + std::to_string(k) + "/permeability_law: \"" + s.materials[k].permeability_law +
-               "\" is not implemented in explicit-single-point yet (constant permeability only)");
   // Pressure stabilisations each formulation has (the parser knows the union of them all).
   const std::string& pressure = s.solver.stabilisation.pressure;
   const bool semi_implicit = s.formulation == scene::Formulation::semi_implicit_single_point ||

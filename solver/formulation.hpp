@@ -6,6 +6,8 @@
 // bad (non-finite, J <= 0, outside the grid) in `Health` instead of throwing.
 #pragma once
 
+#include <omp.h>
+
 #include <memory>
 #include <string>
 #include <vector>
@@ -65,6 +67,22 @@ struct StageTimes {
   std::vector<std::string> names;
   std::vector<double> seconds;
   void add(const char* name, double s);
+};
+
+/// A step's clock: lap("stage") adds the wall time since the last lap (or since the clock
+/// started) to `times` under that stage's name.
+class StageClock {
+ public:
+  explicit StageClock(StageTimes& times) : times_(times), t0_(omp_get_wtime()) {}
+  void operator()(const char* stage) {
+    const double t1 = omp_get_wtime();
+    times_.add(stage, t1 - t0_);
+    t0_ = t1;
+  }
+
+ private:
+  StageTimes& times_;
+  double t0_;
 };
 
 template <int Dim>

@@ -48,12 +48,7 @@ class Dry final : public Formulation<Dim> {
     const double dt = ctx.dt;
     Vec<Dim> b;
     for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
-    double t0 = omp_get_wtime();
-    auto lap = [&](const char* stage) {
-      const double t1 = omp_get_wtime();
-      this->times_.add(stage, t1 - t0);
-      t0 = t1;
-    };
+    StageClock lap(this->times_);
 
     // (0) every reorder_interval steps, store the particles in last step's schedule order, so the
     //     transfers below walk particle memory sequentially (results stay thread-independent).

@@ -28,20 +28,23 @@
 #include "solver/formulations/registry.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/porous/drag.hpp"
+#include "solver/porous/permeability.hpp"
+#include "solver/porous/points.hpp"
+#include "solver/porous/porosity.hpp"
 #include "solver/transfer/fbar.hpp"
+#include "solver/transfer/projection.hpp"
 #include "solver/transfer/transfer.hpp"
 
 namespace swmpm {
 namespace {
 
-constexpr double g_earth = 9.81;  // m/s^2, in the hydraulic-conductivity definition k = rho_f g kappa / mu
-
-/// Fluid and permeability constants of one solid material in a saturated body.
+/// Fluid and permeability of one solid material in a saturated body.
 struct PoreFluid {
-  double rho_f;  // kg/m^3, fluid density
-  double K_f;    // Pa, fluid bulk modulus
-  double k;      // m/s, hydraulic conductivity of the skeleton (the initialisation phase's while it runs)
-  double k_scene;  // m/s, the material's own
+  double rho_f = 0.0;  // kg/m^3, fluid density
+  double K_f = 0.0;    // Pa, fluid bulk modulus
+  porous::Permeability perm;        // of the skeleton (the initialisation phase's while it runs)
+  porous::Permeability scene_perm;  // the material's own
 };
 
 template <int Dim, class Shape>
@@ -72,26 +75,18 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     if (!state.solid.two_phase())
       throw std::runtime_error("explicit-single-point needs saturated particles (pore_pressure, porosity, fluid_mass "
                                "in particles/solid.vtu): run swmpm preprocess with a body that has a solid and a fluid");
-    pore_.resize(s.materials.size(), PoreFluid{0, 0, 0, 0});
-    for (std::size_t k = 0; k < s.materials.size(); ++k) {
-      const auto& m = s.materials[k];
-      if (m.model == scene::MaterialModel::fluid) continue;
-      pore_[k].k = m.has("hydraulic_conductivity") ? m.at("hydraulic_conductivity") : 0.0;
-    }
+    pore_.resize(s.materials.size());
+    std::vector<char> seen(s.materials.size(), 0);
     for (std::size_t p = 0; p < state.solid.size(); ++p) {  // fluid of each solid material (first seen)
-      if (state.solid.fluid_material[p] < 0) continue;      // a dry body in a saturated scene
-      const auto& f = s.materials[state.solid.fluid_material[p]];
-      auto& pf = pore_[state.solid.material[p]];
+      const int k = state.solid.material[p], fm = state.solid.fluid_material[p];
+      if (fm < 0 || seen[k]) continue;  // a dry body in a saturated scene, or known
+      seen[k] = 1;
+      const auto& f = s.materials[fm];
+      auto& pf = pore_[k];
       pf.rho_f = f.at("density");
       pf.K_f = f.at("bulk_modulus");
-      if (pf.k == 0.0 && s.materials[state.solid.material[p]].has("intrinsic_permeability"))
-        pf.k = s.materials[state.solid.material[p]].at("intrinsic_permeability") * pf.rho_f * g_earth /
-               f.at("dynamic_viscosity");
-      if (!(pf.k > 0.0))
-        throw std::runtime_error("material \"" + s.materials[state.solid.material[p]].name +
-                                 "\": a saturated skeleton needs hydraulic_conductivity or intrinsic_permeability");
+      pf.perm = pf.scene_perm = porous::permeability_of(s.materials[k], f);
     }
-    for (auto& pf : pore_) pf.k_scene = pf.k;
     solid_.resize(grid_.num_nodes());
     fluid_.resize(grid_.num_nodes());
     drag_.assign(grid_.num_nodes(), 0.0);
@@ -109,12 +104,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     const double dt = ctx.dt;
     Vec<Dim> b;
     for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
-    double t0 = omp_get_wtime();
-    auto lap = [&](const char* stage) {
-      const double t1 = omp_get_wtime();
-      this->times_.add(stage, t1 - t0);
-      t0 = t1;
-    };
+    StageClock lap(this->times_);
 
     if (reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval)) lap("reorder");  // (0)
 
@@ -146,7 +136,9 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     update_grid(dt);                                                                     // (3)
     lap("grid update");
 
-    gather_and_remap(ps, dt);                                                            // (4)-(5)
+    // (4)-(5) FLIP/PIC of both phases, positions with the solid, MUSL remap of both momenta
+    porous::gather_soil_points</*kPoreWater=*/true, /*kRemapWater=*/true>(grid_, box_, schedule_, sd_, flip_, dt, ps,
+                                                                         solid_, fluid_);
     bcs_solid_.apply(grid_, box_, solid_.v, false);
     bcs_fluid_.apply(grid_, box_, fluid_.v, false);
     lap("g2p + musl remap");
@@ -227,9 +219,12 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   void set_initialisation(State<Dim>& st, const scene::Initialisation* phase) override {
     set_plastic(materials_, phase == nullptr || phase->plasticity);
     damping_ = phase_damping(phase, scene_damping_);
-    for (auto& pf : pore_) pf.k = phase && phase->hydraulic_conductivity ? *phase->hydraulic_conductivity : pf.k_scene;
+    for (auto& pf : pore_)
+      pf.perm = phase && phase->hydraulic_conductivity
+                    ? porous::Permeability{.law = porous::Permeability::Law::constant, .k0 = *phase->hydraulic_conductivity}
+                    : pf.scene_perm;
     // The phase's seepage velocities belong to its permeability: the pore water restarts at the
-    // skeleton's velocity and the drag brings it to the scene's Darcy flow (as semi_implicit.cpp).
+    // skeleton's velocity and the drag brings it to the scene's Darcy flow (as semi_implicit/single_point.cpp).
     if (phase) fast_drainage_ = phase->hydraulic_conductivity.has_value();
     else if (fast_drainage_) st.solid.v_f = st.solid.v, fast_drainage_ = false;
   }
@@ -262,7 +257,11 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       const PoreFluid& pf = pore_[ps.material[p]];
       const double V = ps.V[p], n = ps.n[p];
       const bool wet = ps.fluid_material[p] >= 0;  // dry points (no pore fluid) carry no drag
-      if (conservative_) gather_porosity(p);
+      if (conservative_) {
+        const auto np = porous::porosity_at_point(grid_, sp, porosity_);
+        nhat_[p] = np.n;
+        grad_n_[p] = np.grad;
+      }
       // The pressure the forces see: the point's own, or its cell's (cell-constant pressure); the
       // porosity: the point's own, or (conservative) n^ interpolated from the nodal porosity, whose
       // gradient adds the interaction force p grad n^ (fluid +, soil -).
@@ -277,7 +276,8 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       const Vec<Dim> mv_s = m_s * ps.v[p], mv_f = m_f * ps.v_f[p];
       const Vec<Dim> interaction = conservative_ ? Vec<Dim>((pp * V) * grad_n_[p]) : Vec<Dim>::Zero();
       const Vec<Dim> mb_s = m_s * b - interaction, mb_f = m_f * b + interaction;
-      const double drag = wet ? n * n * pf.rho_f * g_earth / pf.k * V : 0.0;
+      // eq. 12: the Darcy drag n^2 rho_f g / k of the point's permeability (the scene's law).
+      const double drag = wet ? porous::darcy_drag(n, pf.rho_f, pf.perm.at(n, porous::initial_porosity(n, V, ps.V0[p]))) * V : 0.0;
       // Row-factored (shape::for_each_row): grad N = (dwx[a] w_r, wx[a] g_r).
       shape::for_each_row(grid_, sp, [&](std::size_t row, double w_r, const Vec<Dim - 1>& g_r) {
         const Vec<Dim> fs_w = w_r * mb_s - A.template rightCols<Dim - 1>() * g_r, fs_dw = -w_r * A.col(0);
@@ -306,7 +306,8 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
 
   /// (3) Per node and component, with u = velocities at the end of the step:
   ///   m_s (u_s - vL_s) = dt F_s - dt D (u_s - u_f),   m_f (u_f - vL_f) = dt F_f + dt D (u_s - u_f)
-  /// solved exactly (2x2); local damping acts on each phase's unbalanced force.
+  /// solved exactly (porous::solve_drag); local damping acts on each phase's unbalanced force. A
+  /// node with one phase only moves it without drag.
   void update_grid(double dt) {
     const double alpha = damping_;
     auto damp = [alpha](const Vec<Dim>& f, const Vec<Dim>& v) { return local_damping<Dim>(f, v, alpha); };
@@ -326,45 +327,17 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       }
       const Vec<Dim> rs = ms * vLs + dt * damp(ns.f, vLs);
       const Vec<Dim> rf = mf * vLf + dt * damp(nf.f, vLf);
-      const double c = has_s && has_f ? dt * drag_[i] : 0.0;
-      const double det = (ms + c) * (mf + c) - c * c;
-      solid_.v[i] = has_s ? Vec<Dim>(((mf + c) * rs + c * rf) / det) : Vec<Dim>::Zero();
-      fluid_.v[i] = has_f ? Vec<Dim>((c * rs + (ms + c) * rf) / det) : Vec<Dim>::Zero();
+      if (has_s && has_f) {
+        const auto u = porous::solve_drag<Dim>(ms, mf, dt * drag_[i], rs, rf);
+        solid_.v[i] = u.v_s;
+        fluid_.v[i] = u.v_w;
+      } else {
+        solid_.v[i] = has_s ? Vec<Dim>(rs / ms) : Vec<Dim>::Zero();
+        fluid_.v[i] = has_f ? Vec<Dim>(rf / mf) : Vec<Dim>::Zero();
+      }
     });
     bcs_solid_.apply(grid_, box_, solid_.v, true);
     bcs_fluid_.apply(grid_, box_, fluid_.v, false);
-  }
-
-  /// (4)-(5) FLIP/PIC update of both phases' particle velocities, positions with the solid, and
-  /// the MUSL remap of both momenta (one pass through the stripe schedule).
-  void gather_and_remap(ParticleSet<Dim>& ps, double dt) {
-    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
-      solid_.acc[i].mv.setZero();
-      fluid_.acc[i].mv.setZero();
-    });
-    schedule_.run([&](int p) {
-      Vec<Dim> vs = Vec<Dim>::Zero(), vs_old = Vec<Dim>::Zero(), vf = Vec<Dim>::Zero(), vf_old = Vec<Dim>::Zero();
-      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
-        vs += N * solid_.v[i];
-        vs_old += N * solid_.vL[i];
-        vf += N * fluid_.v[i];
-        vf_old += N * fluid_.vL[i];
-      });
-      ps.v[p] = flip_ * (ps.v[p] + vs - vs_old) + (1.0 - flip_) * vs;
-      ps.v_f[p] = flip_ * (ps.v_f[p] + vf - vf_old) + (1.0 - flip_) * vf;
-      ps.x[p] += dt * vs;
-      const Vec<Dim> mvs = ps.m[p] * ps.v[p], mvf = ps.m_f[p] * ps.v_f[p];
-      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
-        solid_.acc[i].mv += N * mvs;
-        fluid_.acc[i].mv += N * mvf;
-      });
-    });
-    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
-      const auto& ns = solid_.acc[i];
-      const auto& nf = fluid_.acc[i];
-      solid_.v[i] = ns.m > transfer::empty_node_mass ? Vec<Dim>(ns.mv / ns.m) : Vec<Dim>::Zero();
-      fluid_.v[i] = nf.m > transfer::empty_node_mass ? Vec<Dim>(nf.mv / nf.m) : Vec<Dim>::Zero();
-    });
   }
 
   /// (6) L_s = sum v_s (x) grad N (into ps.L) and div v_f = sum v_f . grad N (eqs. 24-25).
@@ -423,38 +396,13 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   }
 
   /// (1c) Nodal porosity n_I = sum N m_s n / sum N m_s (soil-mass weighted, as seed 001 step 2c).
-  /// The points' n^ = sum N_I n_I and grad n^ = sum grad N_I n_I, which the interaction force and
-  /// the conservative continuity share, are gathered in the force scatter of (2).
+  /// The points' n^ = sum N_I n_I and grad n^ = sum grad N_I n_I (porous::porosity_at_point), which
+  /// the interaction force and the conservative continuity share, are gathered in the force
+  /// scatter of (2).
   void nodal_porosity(const ParticleSet<Dim>& ps) {
-    schedule_.run([&](int p) {
-      const double m = ps.m[p], mn = m * ps.n[p];
-      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
-        porosity_[i][0] += N * mn;
-        porosity_[i][1] += N * m;
-      });
-    });
-    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
-      auto& np = porosity_[i];
-      np[0] = np[1] > transfer::empty_node_mass ? np[0] / np[1] : 0.0;
-    });
+    porous::nodal_porosity(grid_, box_, schedule_, sd_, ps, porous::PorosityWeight::mass, 0.0, porosity_);
     nhat_.resize(ps.size());
     grad_n_.resize(ps.size());
-  }
-
-  /// n^_p and grad n^_p from the nodal porosity of (1c), into nhat_ and grad_n_ (sized by
-  /// nodal_porosity). Every node of a point's support with N > 0 holds that point's mass, so the
-  /// weights of the nodes used sum to 1 (partition of unity) up to round-off.
-  void gather_porosity(int p) {
-    double nh = 0.0, wsum = 0.0;
-    Vec<Dim> g = Vec<Dim>::Zero();
-    shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
-      if (!(porosity_[i][1] > transfer::empty_node_mass)) return;
-      nh += N * porosity_[i][0];
-      g += porosity_[i][0] * dN;
-      wsum += N;
-    });
-    nhat_[p] = nh / wsum;
-    grad_n_[p] = g;
   }
 
   std::size_t cell_of(const Vec<Dim>& x) const {
@@ -506,9 +454,9 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     if (cell_pressure_) return update_cell_pressure(ps, dt);
     // With a multi-field variational step the rate is computed inside its scatter and the
     // pressure updated inside its gather (two passes over the particles fewer).
-    if (mfvp_order_ == 0) return mfvp<0>(ps, dt);
-    if (mfvp_order_ == 1) return mfvp<1>(ps, dt);
-    if (mfvp_order_ == 2) return mfvp<2>(ps, dt);
+    if (mfvp_order_ == 0) return mfvp(mfvp0_, ps, dt);
+    if (mfvp_order_ == 1) return mfvp(mfvp1_, ps, dt);
+    if (mfvp_order_ == 2) return mfvp(mfvp2_, ps, dt);
     const long n = static_cast<long>(ps.size());
     long bad = transfer::no_particle;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
@@ -549,116 +497,23 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     return -(K_f / np) * ((1.0 - np) * div_s_[p] + np * div_f_[p]);
   }
 
-  /// Number of basis functions of order `Order` in Dim dimensions: 1, 1 + Dim, (Dim+1)(Dim+2)/2.
-  template <int Order>
-  static constexpr int basis_size() {
-    return Order == 0 ? 1 : (Order == 1 ? 1 + Dim : (Dim + 1) * (Dim + 2) / 2);
-  }
-  /// Q at offset d = x_p - x_I (centred at the node, in cells, to keep H_I well conditioned):
-  /// [1], [1, dx, dy(, dz)], or [1, dx, dy, dx^2, dx dy, dy^2] (and z terms in 3D).
-  template <int Order>
-  static Eigen::Matrix<double, basis_size<Order>(), 1> basis(const Vec<Dim>& d) {
-    Eigen::Matrix<double, basis_size<Order>(), 1> q;
-    q[0] = 1.0;
-    if constexpr (Order >= 1)
-      for (int a = 0; a < Dim; ++a) q[1 + a] = d[a];
-    if constexpr (Order == 2) {
-      int k = 1 + Dim;
-      for (int a = 0; a < Dim; ++a)
-        for (int b = a; b < Dim; ++b) q[k++] = d[a] * d[b];
-    }
-    return q;
-  }
-
   /// eqs. 33-34, node-based: H_I = sum_p Q Q^T N V, a_I = H_I^-1 sum_p N Q pdot_p V (the sign of
-  /// eq. 33 folded into pdot_p), pdot_p = sum_I N_Ip Q_p^T a_I, Q centred at node I. A node whose
-  /// H_I is singular (too few particles for the basis) falls back to the constant basis.
-  template <int Order>
-  long mfvp(ParticleSet<Dim>& ps, double dt) {
-    constexpr int NQ = basis_size<Order>();
-    using VecQ = Eigen::Matrix<double, NQ, 1>;
-    using MatQ = Eigen::Matrix<double, NQ, NQ>;
-    // Per node one block: the upper triangle of H_I packed row by row, then the right-hand side
-    // (replaced by the coefficients a_I after the solve) — one cache line or two per node.
-    constexpr int NH = NQ * (NQ + 1) / 2, NB = NH + NQ;
-    const std::size_t nodes = grid_.num_nodes();
-    if (mfvp_.size() != nodes * NB) mfvp_.assign(nodes * NB, 0.0);
-    auto block = [&](std::size_t i) { return mfvp_.data() + i * NB; };
-    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { std::fill_n(block(i), NB, 0.0); });
-    // Positions are those the shape data were evaluated at (start of step) for Order 0; for
-    // higher orders the current positions serve as the quadrature points of the projection.
-    schedule_.run([&](int p) {
-      const double V = ps.V[p], pdot = pressure_rate(ps, p);
-      for_each_node_offset(sd_[p], ps.x[p], [&](std::size_t i, double N, const Vec<Dim>& d) {
-        if (N <= 0.0) return;
-        const VecQ q = basis<Order>(d);
-        double* blk = block(i);
-        const double NV = N * V;
-        for (int r = 0, k = 0; r < NQ; ++r) {
-          const double s_r = NV * q[r];
-          for (int c = r; c < NQ; ++c) blk[k++] += s_r * q[c];
-        }
-        const double NVp = N * V * pdot;
-        for (int r = 0; r < NQ; ++r) blk[NH + r] += NVp * q[r];
-      });
-    });
-    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
-      double* blk = block(i);
-      if (!(blk[0] > 0.0)) return;
-      Eigen::Map<VecQ> rhs(blk + NH);
-      if constexpr (NQ > 1) {
-        MatQ H;
-        for (int r = 0, k = 0; r < NQ; ++r)
-          for (int c = r; c < NQ; ++c) H(r, c) = H(c, r) = blk[k++];
-        Eigen::LDLT<MatQ> ldlt(H);
-        const double cond = ldlt.vectorD().cwiseAbs().minCoeff() / ldlt.vectorD().cwiseAbs().maxCoeff();
-        VecQ a = VecQ::Zero();
-        if (ldlt.info() == Eigen::Success && cond > 1e-8) a = ldlt.solve(rhs);
-        else a[0] = rhs[0] / blk[0];  // too few particles for the basis: constant
-        rhs = a;  // the node's coefficients
-      } else {
-        rhs[0] /= blk[0];
-      }
-    });
+  /// eq. 33 folded into pdot_p), pdot_p = sum_I N_Ip Q_p^T a_I, Q centred at node I
+  /// (transfer/projection.hpp, without its leverage limit: a node whose H_I is singular, too few
+  /// particles for the basis, falls back to the constant basis). For Order 0 the positions are
+  /// immaterial; for higher orders the current positions serve as the quadrature points.
+  template <class Projection>
+  long mfvp(Projection& projection, ParticleSet<Dim>& ps, double dt) {
+    projection.fit(grid_, box_, schedule_, sd_, ps.x, [&](int p) { return ps.V[p]; },
+                   [&](int p) { return pressure_rate(ps, p); });
     const long n = static_cast<long>(ps.size());
     long bad = transfer::no_particle;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
-      double value = 0.0;
-      for_each_node_offset(sd_[p], ps.x[p], [&](std::size_t i, double N, const Vec<Dim>& d) {
-        const double* blk = block(i);
-        if (N <= 0.0 || !(blk[0] > 0.0)) return;
-        value += N * basis<Order>(d).dot(Eigen::Map<const VecQ>(blk + NH));
-      });
-      ps.p[p] += dt * value;
+      ps.p[p] += dt * projection.at_point(grid_, sd_[p], ps.x[p]);
       if (!std::isfinite(ps.p[p])) bad = std::min(bad, p);
     }
     return bad == transfer::no_particle ? -1 : bad;
-  }
-
-  /// Calls fn(node, N_Ip, d) over a particle's nodes in for_each_node's order, with d = (x - x_I) / h
-  /// from per-axis offsets (no flat-index decoding per node).
-  template <class Fn>
-  void for_each_node_offset(const shape::ShapeData<Dim, S>& sd, const Vec<Dim>& x, Fn&& fn) const {
-    const double inv_h = 1.0 / grid_.h();
-    double off[Dim][S];
-    for (int a = 0; a < Dim; ++a)
-      for (int k = 0; k < S; ++k) off[a][k] = (x[a] - grid_.axis(a).node_x[sd.base[a] + k]) * inv_h;
-    const auto& nn = grid_.nodes_per_axis();
-    if constexpr (Dim == 2) {
-      for (int b = 0; b < S; ++b) {
-        const std::size_t row = static_cast<std::size_t>(sd.base[1] + b) * nn[0] + sd.base[0];
-        for (int a = 0; a < S; ++a) fn(row + a, sd.w[0][a] * sd.w[1][b], Vec<2>(off[0][a], off[1][b]));
-      }
-    } else {
-      for (int c = 0; c < S; ++c)
-        for (int b = 0; b < S; ++b) {
-          const std::size_t row =
-              (static_cast<std::size_t>(sd.base[2] + c) * nn[1] + (sd.base[1] + b)) * nn[0] + sd.base[0];
-          const double wbc = sd.w[1][b] * sd.w[2][c];
-          for (int a = 0; a < S; ++a) fn(row + a, sd.w[0][a] * wbc, Vec<3>(off[0][a], off[1][b], off[2][c]));
-        }
-    }
   }
 
   /// (8) F_{n+1} = dF F_n, V = det F V0; porosity from (1 - n) V = const (eq. 4, incompressible
@@ -670,11 +525,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       div_s_[p] = ps.L[p].trace();  // eq. 9 takes the (smoothed) rate of (6): F-bar acts on the skeleton only
-      transfer::apply_increment<Dim>(transfer::deformation_increment<Dim>(ps.L[p], dt), ps.F[p]);  // F_{n+1} = dF F_n
-      const double V_old = ps.V[p];
-      const double J = ps.F[p].determinant();
-      ps.V[p] = J * ps.V0[p];
-      ps.n[p] = 1.0 - (1.0 - ps.n[p]) * V_old / ps.V[p];
+      const double J = porous::update_skeleton<Dim>(ps.L[p], dt, ps.F[p], ps.V[p], ps.V0[p], ps.n[p]);
       const bool wet = ps.fluid_material[p] >= 0;
       if (wet) ps.m_f[p] = ps.n[p] * pore_[ps.material[p]].rho_f * ps.V[p];
       if (!(J > 0.0) || !(ps.n[p] >= 0.0 && ps.n[p] < 1.0) || (wet && !(ps.n[p] > 0.0))) bad = std::min(bad, p);
@@ -707,7 +558,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::vector<PoreFluid> pore_;  // per solid material
   NodeFields<Dim> solid_, fluid_;
   std::vector<double> drag_;                         // per node
-  std::vector<double> mfvp_;                         // per node: packed H_I, then rhs / coefficients a_I
+  // The multi-field variational step of each basis order (only the scene's is used).
+  NodeProjection<Dim, S, 0, LeverageLimit::off> mfvp0_;
+  NodeProjection<Dim, S, 1, LeverageLimit::off> mfvp1_;
+  NodeProjection<Dim, S, 2, LeverageLimit::off> mfvp2_;
   std::vector<double> div_f_;                        // per particle
   std::vector<double> div_s_;                        // per particle: tr L_s of (6), before F-bar
   std::vector<std::size_t> smooth_cell_;             // per particle

@@ -17,8 +17,8 @@ std::unique_ptr<Formulation<Dim>> make_formulation(const scene::Scene& s, const 
   switch (s.formulation) {
     case scene::Formulation::dry: return make_dry<Dim>(s, state);
     case scene::Formulation::explicit_single_point: return make_explicit_single_point<Dim>(s, state);
-    case scene::Formulation::semi_implicit_single_point:
-    case scene::Formulation::semi_implicit_double_point: return make_semi_implicit<Dim>(s, state);
+    case scene::Formulation::semi_implicit_single_point: return make_semi_implicit_single_point<Dim>(s, state);
+    case scene::Formulation::semi_implicit_double_point: return make_semi_implicit_double_point<Dim>(s, state);
     default:
       throw std::runtime_error("formulation \"" + scene::to_string(s.formulation) +
                                "\" is not implemented yet in this version (available: dry, explicit-single-point, semi-implicit-single-point, semi-implicit-double-point)");

@@ -157,6 +157,8 @@ std::unique_ptr<Formulation<Dim>> make_dry(const scene::Scene& s, const State<Di
 template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_explicit_single_point(const scene::Scene& s, const State<Dim>& state);
 template <int Dim>
-std::unique_ptr<Formulation<Dim>> make_semi_implicit(const scene::Scene& s, const State<Dim>& state);
+std::unique_ptr<Formulation<Dim>> make_semi_implicit_single_point(const scene::Scene& s, const State<Dim>& state);
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_semi_implicit_double_point(const scene::Scene& s, const State<Dim>& state);
 
 }  // namespace swmpm

@@ -4,7 +4,8 @@
 //   per node I:  H_I = sum_p w_p N_Ip Q_p Q_p^T,   a_I = H_I^-1 sum_p w_p N_Ip Q_p f_p
 //   at a point:  f(x) = sum_I N_I(x) Q(x)^T a_I
 //
-// with Q = [1] (Order 0: a_I is the w-weighted nodal average of eq. 77) or Q = [1, d] (Order 1),
+// with Q = [1] (Order 0: a_I is the w-weighted nodal average of eq. 77), Q = [1, d] (Order 1) or
+// Q = [1, d, d_a d_b (a <= b)] (Order 2: seed 000's quadratic multi-field variational basis),
 // d = (x - x_I) / h centred at the node, so that a_I[0] is the fitted value AT the node and a
 // linear field is reproduced exactly (also at nodes on a free surface, where a plain average is
 // biased towards the interior). A node whose H_I is near-singular (pivot ratio < 1e-8: too few
@@ -21,6 +22,8 @@
 // kMaxLeverage = 100 (node value error at most 10 x the data's) the node falls back to Order 0,
 // unless the caller imposes a gradient (impose_gradient), with which only the value is fitted,
 // a_I0 = mean_w(f - grad . (x - x_I)): a linear field with that gradient is still reproduced.
+// Leverage is a choice of the projection (LeverageLimit): seed 000's multi-field variational
+// pressure step (explicit-single-point) has none, only the pivot test.
 #pragma once
 
 #include <algorithm>
@@ -35,10 +38,14 @@
 
 namespace swmpm {
 
-template <int Dim, int S, int Order>
+/// Whether a node whose fit has a leverage above kMaxLeverage falls back to Order 0.
+enum class LeverageLimit { on, off };
+
+template <int Dim, int S, int Order, LeverageLimit kLeverage = LeverageLimit::on>
 class NodeProjection {
  public:
-  static constexpr int NQ = Order == 0 ? 1 : 1 + Dim;
+  static_assert(Order >= 0 && Order <= 2);
+  static constexpr int NQ = Order == 0 ? 1 : (Order == 1 ? 1 + Dim : (Dim + 1) * (Dim + 2) / 2);
   static constexpr int NH = NQ * (NQ + 1) / 2, NB = NH + NQ;
   using VecQ = Eigen::Matrix<double, NQ, 1>;
   using MatQ = Eigen::Matrix<double, NQ, NQ>;
@@ -67,6 +74,13 @@ class NodeProjection {
         if constexpr (Order == 0) {
           h[0] += wN;
           h[1] += wf;
+        } else if constexpr (Order == 2) {
+          const VecQ q = basis(d0, d1, d2);
+          for (int r = 0, k = 0; r < NQ; ++r) {
+            const double s_r = wN * q[r];
+            for (int c = r; c < NQ; ++c) h[k++] += s_r * q[c];
+          }
+          for (int r = 0; r < NQ; ++r) h[NH + r] += wf * q[r];
         } else if constexpr (Dim == 2) {
           const double s1 = wN * d0, s2 = wN * d1;
           h[0] += wN, h[1] += s1, h[2] += s2;
@@ -98,7 +112,7 @@ class NodeProjection {
         const double cond = ldlt.vectorD().cwiseAbs().minCoeff() / ldlt.vectorD().cwiseAbs().maxCoeff();
         VecQ a = VecQ::Zero();
         bool ok = ldlt.info() == Eigen::Success && cond > 1e-8;
-        if (ok) {
+        if (kLeverage == LeverageLimit::on && ok) {
           // Leverage of the node: lambda = W (H^-1)_00 = 1 + mean(d)^T C^-1 mean(d) (C the points'
           // weighted covariance of d): a data error e becomes ~ e sqrt(lambda) in a_I0.
           VecQ e0 = VecQ::Zero();
@@ -116,11 +130,25 @@ class NodeProjection {
     });
   }
 
+  /// Q(d) = [1, d, d_a d_b (a <= b)] of Order 2 (d in cells; d2 unused in 2D).
+  static VecQ basis(double d0, double d1, double d2) {
+    const double d[3] = {d0, d1, d2};
+    VecQ q;
+    q[0] = 1.0;
+    for (int a = 0; a < Dim; ++a) q[1 + a] = d[a];
+    if constexpr (Order == 2) {
+      int k = 1 + Dim;
+      for (int a = 0; a < Dim; ++a)
+        for (int b = a; b < Dim; ++b) q[k++] = d[a] * d[b];
+    }
+    return q;
+  }
+
   /// Whether node i received any weight in the last fit.
   bool has(std::size_t i) const { return blocks_[i * NB] > 0.0; }
   /// The fitted value at node i (a_I[0]: the basis is centred at the node).
   double at_node(std::size_t i) const { return has(i) ? blocks_[i * NB + NH] : 0.0; }
-  /// The fitted gradient at node i [unit of f per m]: a_I[1..Dim] / h (zero for Order 0, for a
+  /// The fitted gradient at node i [unit of f per m]: a_I[1..Dim] / h (Order 1; zero for Order 0, for a
   /// node that fell back to Order 0, and for a node without weight).
   Vec<Dim> gradient_at_node(const Grid<Dim>& g, std::size_t i) const {
     Vec<Dim> grad = Vec<Dim>::Zero();
@@ -173,6 +201,8 @@ class NodeProjection {
         qa += d0 * a[1];
         qa += d1 * a[2];
         if constexpr (Dim == 3) qa += d2 * a[3];
+      } else if constexpr (Order == 2) {
+        qa = basis(d0, d1, d2).dot(Eigen::Map<const VecQ>(a));
       }
       fn(i, N, qa);
     });

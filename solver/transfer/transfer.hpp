@@ -85,6 +85,14 @@ NodeBox<2> evaluate_bspline2_pairs(const Grid<2>& g, const ParticleSet<2>& ps,
 }
 #endif
 
+/// The FLIP/PIC blend of a point's velocity (Brackbill's FLIP with a PIC share, every
+/// formulation): v_p <- flip (v_p + v - vL) + (1 - flip) v, with v and vL the end- and
+/// start-of-step nodal velocities interpolated at the point.
+template <class V>
+[[gnu::always_inline]] inline V flip_pic(const V& v_p, const V& v, const V& vL, double flip) {
+  return flip * (v_p + v - vL) + (1.0 - flip) * v;
+}
+
 /// Evaluates every particle's shape data and returns the active node box (the nodes any particle
 /// touches). Particles outside [grid.min, grid.max] or with non-finite positions are reported
 /// through `bad` (smallest index) and get clamped shape data so the step can finish.
@@ -214,7 +222,7 @@ void gather_velocity_position_remap(const Grid<Dim>& g, const StripeSchedule& sc
       v_new += w_r * sv;
       v_old += w_r * svL;
     });
-    const Vec<Dim> v_p = flip * (ps.v[p] + v_new - v_old) + (1.0 - flip) * v_new;
+    const Vec<Dim> v_p = flip_pic(ps.v[p], v_new, v_old, flip);
     ps.v[p] = v_p;
     ps.x[p] += dt * v_new;
     const Vec<Dim> mv_p = ps.m[p] * v_p;

@@ -225,18 +225,6 @@ TEST(Divergence, ParticleLeavingTheGridIsDiagnosed) {
   EXPECT_NE(rj["diagnosis"].get<std::string>().find("left the grid"), std::string::npos) << rj["diagnosis"];
 }
 
-// A permeability law the formulation does not implement is refused by preprocess, naming the key.
-TEST(BadInput, PermeabilityLawTheFormulationLacks) {
-  const fs::path dir = swmpm::testing::scratch("bad-permeability-law");
-  nlohmann::json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi/scene.json");
-  s["materials"][0]["permeability_law"] = "kozeny-carman";
-  std::ofstream(dir / "scene.json") << s.dump(2);
-  const Result r = swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
-  EXPECT_NE(r.status, 0);
-  EXPECT_NE(r.err.find("/materials/0/permeability_law"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(dir / "run" / "particles"));
-}
-
 // F-bar: the dry formulation accepts solver.stabilisation.fbar (and fbar_patch with "modified"),
 // rejects the pore-pressure and smoothing switches, and any formulation rejects a patch size the
 // chosen F-bar does not read; an out-of-range patch is a schema error.

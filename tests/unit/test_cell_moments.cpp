@@ -27,7 +27,7 @@ struct Dense {
 
 /// Points in cells [cx0, cx1] x [cy0, cy1] of a 7 x 5 grid. Single-point adds every weight from
 /// each point; double-point alternates soil points (D^s and L) and water points (D^w and L), as
-/// semi_implicit.cpp does. The box is the points' supports only (a partial box when the range is).
+/// semi_implicit/pressure.hpp does. The box is the points' supports only (a partial box when the range is).
 template <class Shape>
 void check_against_pointwise(int points_per_cell, int cx0 = 0, int cx1 = 6, int cy0 = 0, int cy1 = 4,
                              bool double_point = false, bool derived_laplace = false) {

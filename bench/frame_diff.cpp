@@ -1,0 +1,58 @@
+// frame_diff A.vtu B.vtu: the largest difference between two frames of the same run, per point
+// array, relative to that array's largest magnitude in A (and of the positions, relative to the
+// extent of A's points). Prints one line per array that differs and, last, "max_relative R".
+// bench/bitwise.py uses it to say by how much a case whose hashes moved differs.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+
+#include "scene/pointcloud.hpp"
+
+namespace {
+double relative(const std::vector<double>& a, const std::vector<double>& b) {
+  double scale = 0.0, diff = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    scale = std::max(scale, std::abs(a[i]));
+    diff = std::max(diff, std::abs(a[i] - b[i]));
+  }
+  return scale > 0.0 ? diff / scale : diff;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 3) {
+    std::fprintf(stderr, "usage: frame_diff A.vtu B.vtu\n");
+    return 2;
+  }
+  try {
+    const auto a = swmpm::scene::read_vtu(argv[1]), b = swmpm::scene::read_vtu(argv[2]);
+    if (a.size() != b.size() || a.arrays.size() != b.arrays.size()) {
+      std::printf("structure differs: %zu/%zu points, %zu/%zu arrays\nmax_relative inf\n", a.size(), b.size(),
+                  a.arrays.size(), b.arrays.size());
+      return 1;
+    }
+    std::vector<double> pa, pb;
+    for (std::size_t p = 0; p < a.size(); ++p)
+      for (int d = 0; d < 3; ++d) {
+        pa.push_back(a.points[p][d]);
+        pb.push_back(b.points[p][d]);
+      }
+    double worst = relative(pa, pb);
+    if (worst > 0) std::printf("points %.3e\n", worst);
+    for (const auto& arr : a.arrays) {
+      const auto* other = b.find(arr.name);
+      if (!other || other->values.size() != arr.values.size()) {
+        std::printf("%s missing or resized\nmax_relative inf\n", arr.name.c_str());
+        return 1;
+      }
+      const double r = relative(arr.values, other->values);
+      if (r > 0) std::printf("%s %.3e\n", arr.name.c_str(), r);
+      worst = std::max(worst, r);
+    }
+    std::printf("max_relative %.3e\n", worst);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "frame_diff: %s\n", e.what());
+    return 2;
+  }
+}
