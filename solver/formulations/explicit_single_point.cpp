@@ -25,6 +25,7 @@
 #include <sstream>
 
 #include "solver/formulation.hpp"
+#include "solver/formulations/explicit_single_point/cells.hpp"
 #include "solver/formulations/registry.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
@@ -62,6 +63,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
         scene_damping_(s.solver.damping),
         smoothing_(s.solver.stabilisation.strain_smoothing),
         mfvp_order_(mfvp_order(s.solver.stabilisation.pressure)),
+        smoothing_stage_(grid_),
         materials_(make_materials<Dim>(s)),
         material_particles_(group_by_material(state.solid, s.materials.size())),
         fbar_(s, grid_) {
@@ -90,10 +92,6 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     solid_.resize(grid_.num_nodes());
     fluid_.resize(grid_.num_nodes());
     drag_.assign(grid_.num_nodes(), 0.0);
-    std::size_t cells = 1;
-    for (int a = 0; a < Dim; ++a) cells *= static_cast<std::size_t>(grid_.axis(a).cells);
-    cell_sum_.assign(cells, {0.0, 0.0, 0.0, 0.0});
-    if (cell_pressure_) cell_.assign(cells, CellPressure{});
     if (conservative_) porosity_.assign(grid_.num_nodes(), {0.0, 0.0});
   }
 
@@ -116,7 +114,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     clear_nodes();
     lap("shape functions");
 
-    if (cell_pressure_) project_pressure_to_cells(ps);                                   // (1b)
+    if (cell_pressure_) cells_.project(grid_, schedule_, ps, [&](int p) { return pore_[ps.material[p]].K_f; });  // (1b)
     if (conservative_) nodal_porosity(ps);                                               // (1c)
     if (cell_pressure_ || conservative_) lap("cell pressure and nodal porosity");
 
@@ -144,7 +142,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     lap("g2p + musl remap");
 
     strain_rates(ps);                                                                    // (6)
-    if (smoothing_) smooth_volumetric_rates(ps);
+    if (smoothing_) smoothing_stage_.apply(grid_, ps, div_f_);                           // eqs. 26-27
     lap("strain rates");
 
     bad = update_volumes(ps, dt);                                                        // (8)
@@ -265,7 +263,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       // The pressure the forces see: the point's own, or its cell's (cell-constant pressure); the
       // porosity: the point's own, or (conservative) n^ interpolated from the nodal porosity, whose
       // gradient adds the interaction force p grad n^ (fluid +, soil -).
-      const double pp = cell_pressure_ ? (wet ? cell_[pcell_[p]].pressure() : 0.0) : ps.p[p];
+      const double pp = cell_pressure_ ? (wet ? cells_.at_point(p) : 0.0) : ps.p[p];
       const double nn = conservative_ ? nhat_[p] : n;
       const double ps_solid = (1.0 - nn) * pp * V, ps_fluid = nn * pp * V;  // N m (N in 2D per m)
       // f_s = N (m_s b - p V grad n^) - A grad N with A = V sigma' - (1 - n) p V I;
@@ -373,28 +371,6 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     }
   }
 
-  /// (1b) Cell-constant pressure: p_c = sum S_p p_p / sum S_p over the saturated points whose
-  /// centre lies in cell c at the start of the step, S_p = n_p V_p / K_f (the storage of eq. 9).
-  /// A projection (applied twice it changes nothing): the points of a cell carry one pressure, and
-  /// only a point that moves into another cell is averaged anew. The cell sums go through the
-  /// scatter schedule: a cell's points have their first node in one stripe or two neighbouring
-  /// ones (of different colours), so every cell is summed in one fixed order for any --threads.
-  void project_pressure_to_cells(const ParticleSet<Dim>& ps) {
-    const std::size_t n = ps.size();
-    pcell_.resize(n);
-    const long N = static_cast<long>(n);
-#pragma omp parallel for schedule(static) if (N > parallel_threshold)
-    for (long p = 0; p < N; ++p) pcell_[p] = cell_of(ps.x[p]);
-    schedule_.run([&](int p) { cell_[pcell_[p]] = CellPressure{}; });
-    schedule_.run([&](int p) {
-      if (ps.fluid_material[p] < 0) return;
-      auto& c = cell_[pcell_[p]];
-      const double storage = ps.n[p] * ps.V[p] / pore_[ps.material[p]].K_f;  // m^3/Pa (m^2/Pa in 2D)
-      c.S += storage;
-      c.Sp += storage * ps.p[p];
-    });
-  }
-
   /// (1c) Nodal porosity n_I = sum N m_s n / sum N m_s (soil-mass weighted, as seed 001 step 2c).
   /// The points' n^ = sum N_I n_I and grad n^ = sum grad N_I n_I (porous::porosity_at_point), which
   /// the interaction force and the conservative continuity share, are gathered in the force
@@ -403,42 +379,6 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     porous::nodal_porosity(grid_, box_, schedule_, sd_, ps, porous::PorosityWeight::mass, 0.0, porosity_);
     nhat_.resize(ps.size());
     grad_n_.resize(ps.size());
-  }
-
-  std::size_t cell_of(const Vec<Dim>& x) const {
-    std::size_t idx = 0;
-    for (int a = Dim - 1; a >= 0; --a) {
-      const auto& ax = grid_.axis(a);
-      idx = idx * ax.cells + shape::cell_of((x[a] - ax.origin) / ax.h, ax.cells);
-    }
-    return idx;
-  }
-
-  /// (6) eqs. 26-27: in each cell, the solid-mass-weighted mean of div v_s and the fluid-mass-
-  /// weighted mean of div v_f replace the particles' own; the deviatoric part of L_s is kept.
-  /// In plane strain the volumetric rate is spread over the Dim in-plane axes (no out-of-plane
-  /// strain rate appears).
-  void smooth_volumetric_rates(ParticleSet<Dim>& ps) {
-    const std::size_t n = ps.size();
-    smooth_cell_.resize(n);
-    const long N = static_cast<long>(n);
-#pragma omp parallel for schedule(static) if (N > parallel_threshold)
-    for (long p = 0; p < N; ++p) smooth_cell_[p] = cell_of(ps.x[p]);
-    for (std::size_t p = 0; p < n; ++p) cell_sum_[smooth_cell_[p]] = {0.0, 0.0, 0.0, 0.0};
-    for (std::size_t p = 0; p < n; ++p) {  // serial: cells are shared; fixed summation order
-      auto& cs = cell_sum_[smooth_cell_[p]];
-      cs[0] += ps.m[p] * ps.L[p].trace();
-      cs[1] += ps.m[p];
-      cs[2] += ps.m_f[p] * div_f_[p];
-      cs[3] += ps.m_f[p];
-    }
-#pragma omp parallel for schedule(static) if (N > parallel_threshold)
-    for (long p = 0; p < N; ++p) {
-      const auto& cs = cell_sum_[smooth_cell_[p]];
-      const double div_s = cs[0] / cs[1];
-      ps.L[p] += (div_s - ps.L[p].trace()) / Dim * MatD<Dim>::Identity();
-      if (cs[3] > 0.0) div_f_[p] = cs[2] / cs[3];
-    }
   }
 
   static int mfvp_order(const std::string& pressure) {
@@ -451,7 +391,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   /// (7) eq. 9: pdot_p = -(K_f / n)[(1 - n) div v_s + n div v_f], then the node-based multi-field
   /// variational step (eqs. 33-34) with the basis Q of `mfvp_order_`.
   long update_pore_pressure(ParticleSet<Dim>& ps, double dt) {
-    if (cell_pressure_) return update_cell_pressure(ps, dt);
+    if (cell_pressure_) return cells_.update(schedule_, ps, vol_rate_, dt);
     // With a multi-field variational step the rate is computed inside its scatter and the
     // pressure updated inside its gather (two passes over the particles fewer).
     if (mfvp_order_ == 0) return mfvp(mfvp0_, ps, dt);
@@ -462,23 +402,6 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       ps.p[p] += dt * pressure_rate(ps, static_cast<int>(p));
-      if (!std::isfinite(ps.p[p])) bad = std::min(bad, p);
-    }
-    return bad == transfer::no_particle ? -1 : bad;
-  }
-
-  /// (7) Cell-constant pressure: S_c dp_c/dt = -sum_{p in c} r_p (strain_rates), then every
-  /// saturated point of the cell takes p_c + dt dp_c/dt; S_c, p_c and the cells are those of the
-  /// start of the step (project_pressure_to_cells), as in the forces of (2).
-  long update_cell_pressure(ParticleSet<Dim>& ps, double dt) {
-    schedule_.run([&](int p) { cell_[pcell_[p]].r += vol_rate_[p]; });  // r was cleared in (1b)
-    const long N = static_cast<long>(ps.size());
-    long bad = transfer::no_particle;
-#pragma omp parallel for schedule(static) reduction(min : bad) if (N > parallel_threshold)
-    for (long p = 0; p < N; ++p) {
-      if (ps.fluid_material[p] < 0) continue;
-      const auto& c = cell_[pcell_[p]];
-      ps.p[p] = (c.Sp - dt * c.r) / c.S;
       if (!std::isfinite(ps.p[p])) bad = std::min(bad, p);
     }
     return bad == transfer::no_particle ? -1 : bad;
@@ -542,13 +465,8 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   int mfvp_order_;  // -1 none, 0 constant, 1 linear, 2 quadratic basis Q
   bool cell_pressure_ = false;  // solver.stabilisation.pressure = cell-constant
   bool conservative_ = false;   // solver.continuity = conservative
-  /// Per cell, cell-constant pressure: storage S_c = sum S_p, sum S_p p_p, sum of the points' r_p.
-  struct CellPressure {
-    double S = 0.0, Sp = 0.0, r = 0.0;
-    double pressure() const { return Sp / S; }  // p_c (Pa)
-  };
-  std::vector<CellPressure> cell_;                   // per cell
-  std::vector<std::size_t> pcell_;                   // per particle: its cell at the start of the step
+  explicit_single_point::CellPressure<Dim> cells_;  // (1b), (7) with the cell-constant pressure
+  explicit_single_point::StrainSmoothing<Dim> smoothing_stage_;  // (6), eqs. 26-27
   std::vector<double> vol_rate_;                     // per particle: r_p
   std::vector<std::array<double, 2>> porosity_;      // per node: sum N m n -> n_I, sum N m
   std::vector<double> nhat_, flux_;                  // per particle: n^, grad n^ . (v_f - v_s)
@@ -564,8 +482,6 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   NodeProjection<Dim, S, 2, LeverageLimit::off> mfvp2_;
   std::vector<double> div_f_;                        // per particle
   std::vector<double> div_s_;                        // per particle: tr L_s of (6), before F-bar
-  std::vector<std::size_t> smooth_cell_;             // per particle
-  std::vector<std::array<double, 4>> cell_sum_;      // per cell: sum m div v_s, sum m_s, sum m_f div v_f, sum m_f
   NodeBox<Dim> box_;
   std::vector<shape::ShapeData<Dim, S>> sd_;
   std::vector<FaceForce<Dim, S>> face_forces_;

@@ -22,7 +22,7 @@
 #include <utility>
 #include <vector>
 
-#include "solver/formulations/pressure_poisson.hpp"
+#include "solver/formulations/semi_implicit/pressure_poisson.hpp"
 #include "solver/grid/grid.hpp"
 #include "solver/output/checkpoint.hpp"
 #include "solver/porous/free_surface.hpp"
@@ -51,7 +51,7 @@ class PressureStep {
 
  public:
   using Poisson = PressurePoisson<Dim, S - 1>;  // rows of L reach S - 1 nodes per axis
-  using DSt = Stencil<Dim, S - 1>;               // so do those of D
+  using DSt = linear::Stencil<Dim, S - 1>;               // so do those of D
   static constexpr int KD = DSt::K;
   static constexpr int NP = Dim == 2 ? S * S : S * S * S;  // nodes per point
   /// 2D with a shape function that is one polynomial per cell (linear, B-splines): the operators

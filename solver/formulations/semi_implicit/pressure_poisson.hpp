@@ -1,5 +1,6 @@
 // The pressure-increment Poisson system of the semi-implicit formulations (seed 001, eq. 60), on
-// the structured grid, assembled into a fixed sparsity pattern and solved with CHOLMOD.
+// the structured grid, assembled into a fixed sparsity pattern (linear/stencil.hpp) and solved
+// with CHOLMOD (linear/factorisation.hpp).
 //
 // Each node I keeps the row of L in a dense stencil of (2R + 1)^Dim coefficients (the nodes that
 // can share a particle with it: R = S - 1 for shape functions of support S). Particles scatter into these rows
@@ -16,8 +17,7 @@
 // the factor is kMaxAge steps old.
 #pragma once
 
-#include <Eigen/CholmodSupport>
-#include <Eigen/Sparse>
+#include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -26,54 +26,19 @@
 #include <vector>
 
 #include "solver/grid/grid.hpp"
+#include "solver/linear/factorisation.hpp"
+#include "solver/linear/stencil.hpp"
 #include "solver/output/checkpoint.hpp"
 #include "solver/shape/shape.hpp"
 
 namespace swmpm {
-
-/// A box stencil of reach R nodes per axis around a node: slot k <-> offset d in [-R, R]^Dim
-/// (x fastest), and each slot's step in flat node index on a grid with `nodes` per axis.
-template <int Dim, int R>
-struct Stencil {
-  static constexpr int W = 2 * R + 1;
-  static constexpr int K = Dim == 2 ? W * W : W * W * W;
-  static std::array<int, Dim> offset(int k) {
-    std::array<int, Dim> d;
-    for (int a = 0; a < Dim; ++a) {
-      d[a] = k % W - R;
-      k /= W;
-    }
-    return d;
-  }
-  static int slot(const std::array<int, Dim>& d) {
-    int k = 0, mul = 1;
-    for (int a = 0; a < Dim; ++a) {
-      k += (d[a] + R) * mul;
-      mul *= W;
-    }
-    return k;
-  }
-  static std::array<long, K> steps(const std::array<int, Dim>& nodes) {
-    std::array<long, K> st{};
-    for (int k = 0; k < K; ++k) {
-      const auto d = offset(k);
-      long step = 0, stride = 1;
-      for (int a = 0; a < Dim; ++a) {
-        step += d[a] * stride;
-        stride *= nodes[a];
-      }
-      st[k] = step;
-    }
-    return st;
-  }
-};
 
 /// Symmetric system on grid nodes whose rows reach R nodes per axis (R = S - 1 for shape
 /// functions with support S).
 template <int Dim, int R>
 class PressurePoisson {
  public:
-  using St = Stencil<Dim, R>;
+  using St = linear::Stencil<Dim, R>;
   static constexpr int W = St::W;
   static constexpr int K = St::K;
 
@@ -174,7 +139,7 @@ class PressurePoisson {
       values[e] = role_[I] == unknown && role_[J] == unknown ? stencil_[gather_[e]] : (I == J ? 1.0 : 0.0);
     }
     if (!analysed_) {
-      solver_.analyzePattern(A_);
+      cholesky_.analyse(A_);
       analysed_ = true;
       factored_ = false;
     }
@@ -203,14 +168,12 @@ class PressurePoisson {
     if (factored_ && age_ < kMaxAge && preconditioned_cg()) {
       ++age_;
     } else {
-      solver_.factorize(A_);
-      if (solver_.info() != Eigen::Success) return false;
+      if (!cholesky_.factorise(A_)) return false;
       factor_values_.assign(values, values + nnz);  // what a restart factorises again
       factored_ = true;
       age_ = 0;
       ++factorisations_;
-      x_ = solver_.solve(b_);
-      if (solver_.info() != Eigen::Success) return false;
+      if (!cholesky_.solve(b_, x_)) return false;
     }
     for (int j = 0; j < n; ++j)
       if (role_[equations_[j]] == unknown) dp_[equations_[j]] = x_[j];
@@ -269,12 +232,11 @@ class PressurePoisson {
     std::copy(inner.begin(), inner.end(), A_.innerIndexPtr());
     analysed_ = factored_ = false;
     if (h.at("analysed").get<bool>() && n > 0) {
-      solver_.analyzePattern(A_);
+      cholesky_.analyse(A_);
       analysed_ = true;
       if (h.at("factored").get<bool>()) {
         std::copy(factor_values_.begin(), factor_values_.end(), A_.valuePtr());
-        solver_.factorize(A_);
-        factored_ = solver_.info() == Eigen::Success;
+        factored_ = cholesky_.factorise(A_);
       }
     }
     std::copy(values.begin(), values.end(), A_.valuePtr());
@@ -302,7 +264,7 @@ class PressurePoisson {
     x_.setZero(n);
     if (b_norm == 0.0) return true;
     r_ = b_;
-    z_ = solver_.solve(r_);
+    cholesky_.solve(r_, z_);
     d_ = z_;
     double rz = r_.dot(z_);
     for (int it = 1; it <= kMaxIterations; ++it) {
@@ -312,7 +274,7 @@ class PressurePoisson {
       r_ -= alpha * q_;
       ++cg_iterations_;
       if (r_.norm() <= kTolerance * b_norm) return true;
-      z_ = solver_.solve(r_);
+      cholesky_.solve(r_, z_);
       const double rz_new = r_.dot(z_);
       d_ = z_ + (rz_new / rz) * d_;
       rz = rz_new;
@@ -320,37 +282,17 @@ class PressurePoisson {
     return false;
   }
 
-  /// Lower-triangle CSC pattern of the equation nodes, with the stencil slot and the two nodes of
-  /// every entry.
+  /// Lower-triangle CSC pattern of the equation nodes (linear::StencilPattern), with the stencil
+  /// slot and the two nodes of every entry.
   void build_pattern() {
-    const int n = static_cast<int>(equations_.size());
-    std::vector<int> col_start(n + 1, 0);
-    std::vector<int> rows;
-    gather_.clear();
-    entry_node_.clear();
-    rows.reserve(static_cast<std::size_t>(n) * (K / 2 + 1));
-    for (int j = 0; j < n; ++j) {
-      const std::size_t J = static_cast<std::size_t>(equations_[j]);
-      const auto ijk = ijk_of(J);
-      for (int k = 0; k < K; ++k) {
-        if (step_[k] < 0) continue;  // lower triangle: rows I >= J
-        const auto d = St::offset(k);
-        bool inside = true;
-        // Within this step's box: eq_ (and the roles) of nodes outside it are a former step's.
-        for (int a = 0; a < Dim; ++a) inside = inside && ijk[a] + d[a] >= box_.lo[a] && ijk[a] + d[a] <= box_.hi[a];
-        if (!inside) continue;
-        const std::size_t I = J + step_[k];
-        if (eq_[I] < 0) continue;
-        rows.push_back(eq_[I]);
-        gather_.push_back(J * K + k);  // row J's slot of I: L is symmetric, L_IJ = L_JI
-        entry_node_.push_back({I, J});
-      }
-      col_start[j + 1] = static_cast<int>(rows.size());
+    pattern_.build(nodes_, box_, equations_, eq_, linear::Storage::lower, A_);
+    const auto& entries = pattern_.entries();
+    gather_.resize(entries.size());
+    entry_node_.resize(entries.size());
+    for (std::size_t e = 0; e < entries.size(); ++e) {
+      gather_[e] = entries[e].J * K + static_cast<std::size_t>(entries[e].k);  // row J's slot of I: L_IJ = L_JI
+      entry_node_[e] = {entries[e].I, entries[e].J};
     }
-    A_.resize(n, n);
-    A_.resizeNonZeros(static_cast<Eigen::Index>(rows.size()));
-    std::copy(col_start.begin(), col_start.end(), A_.outerIndexPtr());
-    std::copy(rows.begin(), rows.end(), A_.innerIndexPtr());
     pattern_nodes_ = equations_;
     analysed_ = false;
     ++pattern_builds_;
@@ -360,14 +302,6 @@ class PressurePoisson {
     b.lo.fill(std::numeric_limits<int>::max());
     b.hi.fill(std::numeric_limits<int>::min());
     return b;
-  }
-  std::array<int, Dim> ijk_of(std::size_t i) const {
-    std::array<int, Dim> ijk;
-    for (int a = 0; a < Dim; ++a) {
-      ijk[a] = static_cast<int>(i % nodes_[a]);
-      i /= nodes_[a];
-    }
-    return ijk;
   }
 
   std::array<int, Dim> nodes_;
@@ -384,9 +318,10 @@ class PressurePoisson {
   NodeBox<Dim> box_{};  // the box while the pattern is built (nodes outside it hold stale eq_)
   std::vector<std::size_t> gather_;                   // per CSC entry: its slot in stencil_
   std::vector<std::array<std::size_t, 2>> entry_node_;  // per CSC entry: its row and column nodes
-  Eigen::SparseMatrix<double> A_;
+  linear::StencilPattern<Dim, R> pattern_;
+  linear::CscMatrix A_;
   Eigen::VectorXd b_, x_, r_, z_, d_, q_;  // right-hand side, solution, CG work vectors
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
+  linear::Cholesky cholesky_;
   std::vector<double> factor_values_;  // A_'s values when it was last factorised
   bool analysed_ = false, factored_ = false;
   int age_ = 0;  // steps since the last factorisation

@@ -1,0 +1,65 @@
+// Sparse direct solvers of SuiteSparse behind one small interface (the library's headers stay in
+// factorisation.cpp):
+//   Cholesky  CHOLMOD's supernodal LL^T of a symmetric positive definite matrix, lower triangle
+//             stored (the semi-implicit pressure Poisson, seed 001 eq. 60);
+//   LU        UMFPACK's LU of a general (non-symmetric) matrix, every entry stored (the mpm-fem
+//             velocity-pressure system, seed 004).
+// Both split the symbolic analysis (pattern only: fill-reducing ordering, elimination tree) from
+// the numeric factorisation, so a caller whose pattern is fixed (linear/stencil.hpp) analyses
+// once and factorises each time the values change.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+
+#include "solver/linear/stencil.hpp"
+
+namespace swmpm::linear {
+
+class Cholesky {
+ public:
+  Cholesky();
+  ~Cholesky();
+  Cholesky(const Cholesky&) = delete;
+  Cholesky& operator=(const Cholesky&) = delete;
+
+  /// Symbolic analysis of A's pattern (lower triangle).
+  void analyse(const CscMatrix& A);
+  /// Numeric factorisation of A (the pattern analysed last); false if A is not positive definite.
+  bool factorise(const CscMatrix& A);
+  /// x = A^-1 b with the last factor; false if the solve failed.
+  bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
+
+  long analyses() const { return analyses_; }
+  long factorisations() const { return factorisations_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  long analyses_ = 0, factorisations_ = 0;
+};
+
+class LU {
+ public:
+  LU();
+  ~LU();
+  LU(const LU&) = delete;
+  LU& operator=(const LU&) = delete;
+
+  /// Symbolic analysis of A's pattern (every entry).
+  void analyse(const CscMatrix& A);
+  /// Numeric factorisation of A (the pattern analysed last); false if A is singular.
+  bool factorise(const CscMatrix& A);
+  /// x = A^-1 b with the last factor; false if the solve failed.
+  bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
+
+  long analyses() const { return analyses_; }
+  long factorisations() const { return factorisations_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  long analyses_ = 0, factorisations_ = 0;
+};
+
+}  // namespace swmpm::linear
