@@ -254,7 +254,7 @@ void RunDirectory::remove_owned(const std::function<bool(const std::string& rela
 }
 
 std::vector<std::string> swmpm_files_in(const fs::path& dir) {
-  static const std::regex frame(R"((solid|fluid)_[0-9]{6}\.vtu)");
+  static const std::regex frame(R"((solid|fluid|grid)_[0-9]{6}\.vtu)");
   std::vector<std::string> out;
   std::error_code ec;
   auto add = [&](const std::string& rel) {

@@ -115,8 +115,9 @@ class RunDirectory {
 
 /// The files in `dir` whose names swmpm writes (relative paths): scene.json, run.json, log.txt,
 /// monitors.csv, report.md, particles/{solid,fluid,surfaces}.vtu, output/results.pvd, frames
-/// output/<phase>_NNNNNN.vtu. Whether swmpm wrote them is RunDirectory's question. (Plots take the
-/// monitors' names: each is checked when it is drawn, RunDirectory::claim.)
+/// output/<phase>_NNNNNN.vtu and grid fields output/grid_NNNNNN.vtu. Whether swmpm wrote them is
+/// RunDirectory's question. (Plots take the monitors' names: each is checked when it is drawn,
+/// RunDirectory::claim.)
 std::vector<std::string> swmpm_files_in(const fs::path& dir);
 
 /// A run directory that swmpm may not use as asked: exit 2, nothing written.

@@ -1027,6 +1027,10 @@ const Table& monitor_table() {
                       "every point monitor follows a soil point, whatever `phase` says: the soil points carry the "
                       "water's pore pressure and velocity interpolated from the water points (docs/architecture.md), "
                       "and the log names the soil particle followed."},
+          {.name = "points", .type = Type::choice, .def = "soil", .values = {"soil", "water"},
+           .meaning = "Which particle set a point monitor follows: `water` follows a water point of a double-point "
+                      "formulation (`at`: the nearest at t = 0, or `particle`: its id), e.g. one at a free surface, "
+                      "and may record `displacement_*`, `velocity_*` (the water's), `pore_pressure`, `porosity`."},
           {.name = "quantities", .type = Type::choices, .required = true, .values = all_quantities(),
            .meaning = "What to record; see [monitor rules](#monitor-rules) for which need what.", .nonempty = true},
       }};
@@ -1325,6 +1329,10 @@ class SceneParser {
     parse_output(top.ok("output") ? top.get("output") : json::object(), top.at("output"));
     parse_solver(top.ok("solver") ? top.get("solver") : json::object(), top.at("solver"));
     if (top.ok("formulation")) resolve_formulation(top.str("formulation"), top.at("formulation"));
+    for (const auto& at : water_monitors_)
+      if (s_.formulation != Formulation::semi_implicit_double_point &&
+          s_.formulation != Formulation::explicit_double_point)
+        c_.error(at, "got \"water\", but only the double-point formulations have water points; expected \"soil\"");
     const bool semi_implicit = s_.formulation == Formulation::semi_implicit_single_point ||
                                s_.formulation == Formulation::semi_implicit_double_point;
     if (s_.solver.continuity.empty()) s_.solver.continuity = semi_implicit ? "conservative" : "non-conservative";
@@ -1387,6 +1395,7 @@ class SceneParser {
   Vec3 grid_min_{0, 0, 0}, grid_max_{0, 0, 0};  // as written (before rounding up) [m]
   std::vector<MaterialInfo> material_info_;
   std::vector<std::string> body_paths_;
+  std::vector<std::string> water_monitors_;  // JSON paths of monitors with points "water"
   std::vector<std::optional<Bounds>> body_bounds_;  // per body, when known before preprocess
   struct PendingFooting {
     std::size_t body;
@@ -2059,6 +2068,8 @@ class SceneParser {
       if (m.ok("at")) mon.at = m.vec("at");
       if (m.ok("particle")) mon.particle = static_cast<long>(m.get("particle").get<double>());
       mon.phase = m.str("phase", "solid");
+      mon.points = m.str("points", "soil");
+      if (mon.points == "water") water_monitors_.push_back(m.at("points"));  // checked with the formulation
       if (m.has("at") && m.has("particle")) {
         c_.error(m.at("particle"), "got both \"at\" and \"particle\", expected one of them "
                                    "(or neither, for a global monitor)");
@@ -2495,6 +2506,7 @@ nlohmann::json to_json(const Scene& s) {
     json mj = {{"name", m.name}, {"phase", m.phase}, {"quantities", m.quantities}};
     if (m.at) mj["at"] = vec_json(*m.at, dim);
     if (m.particle) mj["particle"] = *m.particle;
+    if (m.points != "soil") mj["points"] = m.points;
     monitors.push_back(mj);
   }
   j["output"] = {{"interval", s.output.interval},

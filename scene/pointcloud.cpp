@@ -3,6 +3,7 @@
 #include <vtkErrorCode.h>
 #include <vtkObject.h>
 
+#include <algorithm>
 #include <fstream>
 #include <iomanip>
 #include <regex>
@@ -45,7 +46,16 @@ VtuCompression vtu_compression(const std::string& name) {
   throw std::invalid_argument("output.compression: \"" + name + "\" is not one of zlib, lz4, none");
 }
 
-void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression compression) {
+namespace {
+
+/// The cells of write_vtu (one vertex per point) or write_lattice_vtu (pixels or voxels).
+struct Cells {
+  int type = VTK_VERTEX;
+  std::vector<vtkIdType> connectivity;  // `per_cell` point ids per cell
+  int per_cell = 1;
+};
+
+void write_unstructured(const std::string& path, const PointCloud& cloud, const Cells& c, VtuCompression compression) {
   const auto n = static_cast<vtkIdType>(cloud.size());
   // The writer only reads: VTK arrays borrow the cloud's memory (SetArray with save = 1) instead of
   // copying it, which keeps a frame's peak memory to the cloud itself.
@@ -59,19 +69,20 @@ void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression 
   auto points = vtkSmartPointer<vtkPoints>::New();
   points->SetData(borrow(cloud.points.empty() ? nullptr : cloud.points[0].data(), 3));
 
-  // One vertex cell per particle, so ParaView shows points without a filter.
+  const auto cells_n = static_cast<vtkIdType>(c.type == VTK_VERTEX ? n : c.connectivity.size() / c.per_cell);
   auto offsets = vtkSmartPointer<vtkIdTypeArray>::New();
   auto connectivity = vtkSmartPointer<vtkIdTypeArray>::New();
-  offsets->SetNumberOfValues(n + 1);
-  connectivity->SetNumberOfValues(n);
-  for (vtkIdType i = 0; i <= n; ++i) offsets->SetValue(i, i);
-  for (vtkIdType i = 0; i < n; ++i) connectivity->SetValue(i, i);
+  offsets->SetNumberOfValues(cells_n + 1);
+  connectivity->SetNumberOfValues(cells_n * c.per_cell);
+  for (vtkIdType i = 0; i <= cells_n; ++i) offsets->SetValue(i, i * c.per_cell);
+  for (vtkIdType i = 0; i < cells_n * c.per_cell; ++i)
+    connectivity->SetValue(i, c.type == VTK_VERTEX ? i : c.connectivity[static_cast<std::size_t>(i)]);
   auto cells = vtkSmartPointer<vtkCellArray>::New();
   cells->SetData(offsets, connectivity);
 
   auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
   grid->SetPoints(points);
-  grid->SetCells(VTK_VERTEX, cells);
+  grid->SetCells(c.type, cells);
   for (const auto& a : cloud.arrays) {
     if (a.values.size() != static_cast<std::size_t>(n) * a.components)
       throw std::runtime_error(path + ": array \"" + a.name + "\" has the wrong size");
@@ -124,6 +135,31 @@ void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression 
     if (size < 16 || std::string(tail, 16).find("</VTKFile>") == std::string::npos)
       throw files::WriteError(path, "the file is incomplete (No space left on device?)");
   });
+}
+
+}  // namespace
+
+void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression compression) {
+  // One vertex cell per particle, so ParaView shows points without a filter.
+  write_unstructured(path, cloud, Cells{}, compression);
+}
+
+void write_lattice_vtu(const std::string& path, const PointCloud& cloud, const std::array<int, 3>& nodes,
+                       VtuCompression compression) {
+  if (static_cast<std::size_t>(nodes[0]) * nodes[1] * nodes[2] != cloud.size())
+    throw std::runtime_error(path + ": " + std::to_string(cloud.size()) + " points for a lattice of " +
+                             std::to_string(nodes[0]) + " x " + std::to_string(nodes[1]) + " x " +
+                             std::to_string(nodes[2]) + " nodes");
+  const bool three_d = nodes[2] > 1;
+  Cells c{three_d ? VTK_VOXEL : VTK_PIXEL, {}, three_d ? 8 : 4};
+  auto at = [&](int i, int j, int k) -> vtkIdType { return i + nodes[0] * (j + static_cast<vtkIdType>(nodes[1]) * k); };
+  for (int k = 0; k < std::max(nodes[2] - 1, 1); ++k)
+    for (int j = 0; j + 1 < nodes[1]; ++j)
+      for (int i = 0; i + 1 < nodes[0]; ++i)
+        for (int dk = 0; dk < (three_d ? 2 : 1); ++dk)  // pixel and voxel order: x fastest, then y, then z
+          for (int dj = 0; dj < 2; ++dj)
+            for (int di = 0; di < 2; ++di) c.connectivity.push_back(at(i + di, j + dj, k + dk));
+  write_unstructured(path, cloud, c, compression);
 }
 
 PointCloud read_vtu(const std::string& path) {

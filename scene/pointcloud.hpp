@@ -41,14 +41,19 @@ VtuCompression vtu_compression(const std::string& name);
 /// 337 against 334 MB) in 70 % of the time. The file is replaced atomically (files::write_atomically)
 /// and the write checked: a failure throws files::WriteError, leaving the old file as it was.
 void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression compression = VtuCompression::zlib);
+/// Writes grid nodes as a VTK XML unstructured grid of cells over the node lattice (pixels in 2D,
+/// voxels in 3D; `nodes` per axis, 1 for an axis a 2D grid lacks), the points in the lattice's flat
+/// order (x fastest): the grid fields a formulation adds to a frame. Written as write_vtu is.
+void write_lattice_vtu(const std::string& path, const PointCloud& cloud, const std::array<int, 3>& nodes,
+                       VtuCompression compression = VtuCompression::zlib);
 /// Reads a .vtu written by write_vtu (or by another tool): every point-data array is returned.
 PointCloud read_vtu(const std::string& path);
 
 /// One entry of a ParaView time series.
 struct PvdEntry {
   double time;
-  std::string group;  // phase name (solid, fluid)
-  int part = 0;       // block index per phase, as ParaView's PVD reader expects
+  std::string group;  // phase name (solid, fluid), or grid (a formulation's node fields)
+  int part = 0;       // block index per group, as ParaView's PVD reader expects
   std::string file;   // relative to the .pvd
 };
 /// Replaced atomically, as write_vtu; throws files::WriteError.

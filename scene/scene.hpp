@@ -142,6 +142,7 @@ struct Monitor {
   std::optional<Vec3> at;        // nearest particle of `phase` at t = 0, followed through the run
   std::optional<long> particle;  // or a particle id
   std::string phase = "solid";   // solid | fluid
+  std::string points = "soil";   // soil | water: which set a point monitor follows (water: double-point)
   std::vector<std::string> quantities;
 };
 

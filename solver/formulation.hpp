@@ -3,15 +3,19 @@
 // A formulation owns its grid fields and kernels; the loop owns time, loads' clocks, output,
 // monitors, progress and divergence handling. step() advances the state from t to t + dt with the
 // body force of ctx (gravity already ramped) and must report the first particle whose state went
-// bad (non-finite, J <= 0, outside the grid) in `Health` instead of throwing.
+// bad (non-finite, J <= 0, outside the grid), or a grid node whose value did, in `Health` instead
+// of throwing. The hooks after step() (output fields, grid fields, save/restore) are called by the
+// loop between steps, per frame, monitor row or snapshot: never per particle.
 #pragma once
 
 #include <omp.h>
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 #include "solver/output/checkpoint.hpp"
 #include "solver/particles/particles.hpp"
@@ -25,12 +29,15 @@ struct StepContext {
   std::array<double, 3> gravity{0, 0, 0};  // m/s^2, ramp applied
 };
 
-/// Why a step failed: the smallest particle index with a problem, and what it was.
+/// Why a step failed: the smallest particle index with a problem, or else the smallest grid node
+/// (flat index) with one, and what it was. A particle report takes precedence over a node report.
 struct Health {
   long particle = -1;
+  long node = -1;
+  std::array<double, 3> node_x{0, 0, 0};  // m, the failed node's position (node >= 0)
   std::string phase;
   std::string what;
-  bool ok() const { return particle < 0; }
+  bool ok() const { return particle < 0 && node < 0; }
   void report(long p, std::string ph, std::string w) {
     if (p >= 0 && (particle < 0 || p < particle)) {
       particle = p;
@@ -38,6 +45,25 @@ struct Health {
       what = std::move(w);
     }
   }
+  /// A value at grid node `i` (at `x`) went bad: kept unless a particle or a smaller node was reported.
+  void report_node(long i, const std::array<double, 3>& x, std::string ph, std::string w) {
+    if (i >= 0 && particle < 0 && (node < 0 || i < node)) {
+      node = i;
+      node_x = x;
+      phase = std::move(ph);
+      what = std::move(w);
+    }
+  }
+};
+
+/// Grid fields a formulation adds to a frame (Formulation::grid_fields): `cloud.points` are the
+/// node positions in the grid's flat order (x fastest: i + n0 (j + n1 k)), `nodes` the nodes per
+/// axis (1 for the axes a 2D grid lacks), `cloud.arrays` the fields, 1 (scalar) or 3 (vector)
+/// components per node. No arrays: no grid file for the frame.
+struct GridFields {
+  std::array<int, 3> nodes{1, 1, 1};
+  scene::PointCloud cloud;
+  bool empty() const { return cloud.arrays.empty(); }
 };
 
 template <int Dim>
@@ -128,8 +154,16 @@ class Formulation {
   /// (what it derives — damping, permeability, plastic flags, Nor-Sand's memory of an elastic
   /// phase — is then as it was) and after the checkpoint's particle sets are in `s`; it regroups
   /// whatever indexes the particles.
+  /// The same pair keeps the in-memory last-good state (solver.checkpoint_every): the loop's
+  /// snapshot is a Checkpoint in memory built as the restart file is, and a diverged run restores
+  /// it (particles, then restore()) before it writes the last good state as its final frame.
   virtual void save(Checkpoint& c) const = 0;
   virtual void restore(const Checkpoint& c, State<Dim>& s) = 0;
+  /// Grid fields for a frame at the current state (the last completed step's nodal values), written
+  /// beside the particle frames as output/grid_NNNNNN.vtu (group `grid` of results.pvd). Called
+  /// once per frame, after complete_output_fields; none by default. Not for the last-good frame
+  /// of a diverged run (its nodal values are gone).
+  virtual GridFields grid_fields(const State<Dim>& /*s*/) const { return {}; }
 
  protected:
   StageTimes times_;

@@ -13,6 +13,9 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <limits>
+#include <memory>
+#include <optional>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -115,16 +118,198 @@ constexpr int kEnergyCheckEvery = 10;     // steps between energy checks (also a
 constexpr double kEnergyFactor = 10.0;     // allowed growth over the initial energy plus the external work
 constexpr double kEnergyFloor = 1e-9;      // J (J/m in 2D): below this nothing is judged
 
+using Json = nlohmann::ordered_json;
+
+/// Time control: the phases (an initialisation before t = 0, then the analysis to time.end), the
+/// dt of each step, and the time as a compensated sum that lands exactly on the phase's end.
+struct Clock {
+  double t_start = 0.0, end = 0.0, eps_t = 0.0;  // s
+  bool auto_dt = true;
+  bool initialising = false;
+  double time_carry = 0.0;                                               // Kahan compensation of the time
+  double dt_min = std::numeric_limits<double>::max(), dt_max = 0.0;      // s, the stable steps
+  /// One step's dt; `lands`: it ends the phase exactly at `target` (time.end, or 0 after the
+  /// initialisation). `dt_stable` is the dt before that shortening.
+  struct Step {
+    double dt, dt_stable, target;
+    bool lands;
+  };
+
+  Clock() = default;
+  explicit Clock(const scene::Scene& s) : end(s.time.end), auto_dt(!s.time.dt.has_value()) {
+    const scene::Initialisation& init = s.initialisation;
+    t_start = init.enabled() ? -init.duration : 0.0;  // the initialisation runs before t = 0
+    eps_t = 1e-12 * (end - t_start);
+    initialising = init.enabled();
+  }
+  bool ended(double t) const { return t >= end - eps_t; }
+
+  template <int Dim>
+  Step next(const scene::Scene& s, const Formulation<Dim>& f, const State<Dim>& st) const {
+    std::string reason;
+    const double dt = auto_dt ? s.time.cfl * f.critical_time_step(st, reason) : *s.time.dt;
+    // Land on the phase's end (time.end, or 0 after the initialisation): a step that reaches it,
+    // or falls short of it only by the round-off of the summed steps (t = 1 - 2e-12 after 1e5
+    // steps of 1e-5 s), ends exactly there; no sliver step follows.
+    const double target = initialising ? 0.0 : end;
+    const bool lands = target - st.time <= dt * (1.0 + 1e-6);
+    return {lands ? target - st.time : dt, dt, target, lands};
+  }
+
+  /// The state's time and step after the step `st`.
+  template <int Dim>
+  void advance(State<Dim>& s, const Step& st) {
+    if (st.lands) {
+      s.time = st.target;
+      time_carry = 0.0;
+    } else {  // compensated (Kahan) sum: t stays within round-off of the exact sum of the steps
+      const double y = st.dt - time_carry, t_new = s.time + y;
+      time_carry = (t_new - s.time) - y;
+      s.time = t_new;
+    }
+    ++s.step;
+    dt_min = std::min(dt_min, st.dt_stable);
+    dt_max = std::max(dt_max, st.dt_stable);
+  }
+
+  void save(Json& loop) const {
+    loop["initialising"] = initialising, loop["time_carry"] = time_carry;
+    loop["dt_min"] = dt_min, loop["dt_max"] = dt_max;
+  }
+  void restore(const Json& loop) {
+    initialising = loop.at("initialising"), time_carry = loop.at("time_carry");
+    dt_min = loop.at("dt_min"), dt_max = loop.at("dt_max");
+  }
+};
+
+/// Energy check: kinetic + stored energy can grow only by the work of gravity and loads (damping,
+/// drag and plasticity dissipate). A step that creates energy many times over is an instability
+/// even when every value stays finite (a run may blow up and ring down again). The external work
+/// is integrated every step (trapezoidal rule; the end-of-step power is the next step's start
+/// power, one pass over the particles per step).
+/// A material can also release stored energy below its initial value: Nor-Sand's
+/// pressure-dependent elasticity starts at p_ref at zero elastic strain, so an unloaded body
+/// expands and its stored energy goes negative while kinetic energy rises. The sum is then
+/// conserved only up to the integration error of that exchange, so the largest release so far is
+/// allowed on top (B5's slope undamped, first steps: 0.029 J kinetic, -0.028 J stored, sum
+/// 2.6e-4 J, initial energy and work 0). A blow-up grows past any such bound.
+struct EnergyGuard {
+  double work = 0.0, power = 0.0;  // J, W: external work so far, power at the current state
+  double stored0 = 0.0, energy0 = 0.0, work_max = 0.0, released_max = 0.0;  // J
+
+  template <int Dim>
+  void start(const Formulation<Dim>& f, const State<Dim>& s, const StepContext& ctx) {
+    stored0 = f.strain_energy(s);
+    energy0 = f.kinetic_energy(s) + stored0;
+    power = f.external_power(s, ctx);
+  }
+  /// Trapezoidal rule on the power of external forces over a step of `dt` ending with `end_ctx`.
+  template <int Dim>
+  void add_work(const Formulation<Dim>& f, const State<Dim>& s, const StepContext& end_ctx, double dt) {
+    const double power_end = f.external_power(s, end_ctx);
+    work += 0.5 * dt * (power + power_end);
+    power = power_end;
+    work_max = std::max(work_max, work);
+  }
+  /// Empty while the energy is within bounds; else the diagnosis.
+  template <int Dim>
+  std::string created(const Formulation<Dim>& f, const State<Dim>& s) {
+    const double stored = f.strain_energy(s);
+    const double e = f.kinetic_energy(s) + stored;
+    released_max = std::max(released_max, stored0 - stored);
+    const double allowed = kEnergyFactor * (energy0 + work_max) + released_max + kEnergyFloor;
+    if (e <= allowed) return {};
+    std::ostringstream os;
+    os << "energy check: kinetic + stored energy " << e << " J at t = " << s.time << " s (step " << s.step
+       << ") is more than " << kEnergyFactor << " x (initial energy " << energy0
+       << " J + largest external work so far " << work_max << " J) + the largest release of stored energy "
+       << released_max << " J: the scheme is creating energy, i.e. it is unstable (reduce dt or time.cfl)";
+    return os.str();
+  }
+
+  void save(Json& loop) const {
+    loop["work"] = work, loop["power"] = power, loop["stored0"] = stored0, loop["energy0"] = energy0;
+    loop["work_max"] = work_max, loop["released_max"] = released_max;
+  }
+  void restore(const Json& loop) {
+    work = loop.at("work"), power = loop.at("power"), stored0 = loop.at("stored0"), energy0 = loop.at("energy0");
+    work_max = loop.at("work_max"), released_max = loop.at("released_max");
+  }
+};
+
+/// What is due after a step: the energy check, the in-memory last-good snapshot
+/// (solver.checkpoint_every), a monitor row, a frame, a restart checkpoint on disk.
+struct Due {
+  bool energy_check = false, snapshot = false, monitor = false, frame = false, restart = false;
+};
+
 template <int Dim>
 class Runner {
  public:
-  Runner(const std::string& run_dir, const SolveOptions& opt)
-      : dir_(run_dir), run_dir_(run_dir), opt_(opt), log_(opt.quiet) {}
+  Runner(const std::string& run_dir, const SolveOptions& opt, const FormulationFactory<Dim>& factory)
+      : dir_(run_dir), run_dir_(run_dir), opt_(opt), factory_(factory), log_(opt.quiet) {}
 
   int run() {
     const auto wall_start = std::chrono::steady_clock::now();
+    load_state();
+    prepare_run_directory();
+    log_header();
+    std::signal(SIGINT, on_stop_signal);
+    std::signal(SIGTERM, on_stop_signal);  // a scheduler's or `kill`'s stop: as an interrupt
+    tty_ = !opt_.quiet && isatty(fileno(stderr));
+    loop_start_ = last_progress_ = std::chrono::steady_clock::now();
+
+    // A write that fails (a full disk, a file size limit, a removed folder) stops the run with
+    // status `failed`: the frames before it are complete, results.pvd lists them, run.json says why.
+    try {
+      if (resume_) resume_from_checkpoint();
+      else start();
+      while (!clock_.ended(state_.time)) {
+        if (g_interrupted) {
+          status_ = "interrupted";
+          break;
+        }
+        const Clock::Step st = clock_.next(scene_, *f_, state_);
+        const StepContext ctx{load_clock(state_.time), st.dt, gravity_at(state_.time)};
+        f_->step(state_, ctx);
+        if (!state_.health.ok()) {
+          fail(describe_failure(ctx));
+          break;
+        }
+        guard_.add_work(*f_, state_, {load_clock(state_.time + st.dt), st.dt, gravity_at(state_.time + st.dt)}, st.dt);
+        clock_.advance(state_, st);
+        const Due due = due_after_step(end_initialisation_if_due());
+        if (due.energy_check) {
+          if (std::string why = guard_.created(*f_, state_); !why.empty()) {
+            fail(std::move(why));
+            break;
+          }
+        }
+        write_outputs(due);
+        show_progress();
+      }
+      if (tty_) std::fprintf(stderr, "\r%*s\r", 90, "");
+      finish();
+    } catch (const files::WriteError& e) {
+      diagnosis_ = diagnosis_.empty() ? e.what() : diagnosis_ + "; then " + e.what();
+      status_ = "failed";
+      log_.failure(std::string("FAILED: ") + e.what() + "; the run stops here. " +
+                   (frames_.empty() ? std::string("No frame is complete")
+                                    : "The last complete frame is t = " + fmt(frames_.back().time) + " s") +
+                   " (step " + std::to_string(state_.step) + ")");
+    }
+    return report(wall_start);
+  }
+
+ private:
+  // ---- setup -------------------------------------------------------------------------------
+
+  /// The scene, the particle sets of preprocess, the formulation, and (--resume) the checkpoint,
+  /// checked before anything is written.
+  void load_state() {
     scene_ = scene::load_scene((dir_ / "scene.json").string());
     scene_text_ = read_text(dir_ / "scene.json");  // what checkpoints record, read once
+    clock_ = Clock(scene_);
     const fs::path particles = dir_ / "particles" / "solid.vtu";
     state_.solid = particles_from_cloud<Dim>(scene::read_vtu(particles.string()), particles.string());
     if (needs_material_state(scene_)) state_.solid.add_material_state();
@@ -147,26 +332,26 @@ class Runner {
                                  "run swmpm preprocess again");
       state_.surfaces = surface_samples_from_cloud<Dim>(scene::read_vtu(surfaces.string()), surfaces.string());
     }
-    auto formulation = make_formulation<Dim>(scene_, state_);
+    f_ = factory_ ? factory_(scene_, state_) : make_formulation<Dim>(scene_, state_);
     reporters_ = make_materials<Dim>(scene_);  // frames' material state fields (pure functions of the particles)
     compression_ = scene::vtu_compression(scene_.output.compression);
     threads_ = omp_get_max_threads();
+    // --resume: the checkpoint must be this scene's and this version's.
+    if (opt_.resume) resume_ = read_checkpoint(f_->name());
+  }
 
-    // --resume: the checkpoint must be this scene's and this version's; checked before anything
-    // is written.
-    std::optional<Checkpoint> resume;
-    if (opt_.resume) resume = read_checkpoint(formulation->name());
-
-    // The run directory: an earlier solve's files give way (only those swmpm wrote), a file of a
-    // name the solve writes that swmpm did not write stops it before anything is written. A
-    // resumed run keeps what the checkpoint covers and removes the frames written after it.
-    if (resume) {
-      const int frames_kept = resume->header.at("loop").at("frame_count");
+  /// The run directory: an earlier solve's files give way (only those swmpm wrote), a file of a
+  /// name the solve writes that swmpm did not write stops it before anything is written. A resumed
+  /// run keeps what the checkpoint covers and removes the frames written after it. Then log.txt,
+  /// the `running` run.json and monitors.csv.
+  void prepare_run_directory() {
+    if (resume_) {
+      const int frames_kept = resume_->header.at("loop").at("frame_count");
       run_dir_.remove_owned([&](const std::string& rel) {
         int k = -1;
-        return (std::sscanf(rel.c_str(), "output/solid_%d.vtu", &k) == 1 ||
-                std::sscanf(rel.c_str(), "output/fluid_%d.vtu", &k) == 1) &&
-               k >= frames_kept;
+        for (const char* frame : {"output/solid_%d.vtu", "output/fluid_%d.vtu", "output/grid_%d.vtu"})
+          if (std::sscanf(rel.c_str(), frame, &k) == 1) return k >= frames_kept;
+        return false;
       });
     } else {
       run_dir_.remove_owned(solve_output);
@@ -178,397 +363,239 @@ class Runner {
                                        " exists and swmpm did not write it; swmpm never replaces or removes a file it "
                                        "did not write: move it away");
     run_dir_.claim("log.txt");
-    if (resume) log_.open_to_append(dir_ / "log.txt");
+    if (resume_) log_.open_to_append(dir_ / "log.txt");
     else log_.open(dir_ / "log.txt");
-    run_dir_.write_text("run.json", running_report(formulation->name()), true);
+    run_dir_.write_text("run.json", running_report(f_->name()), true);
     run_dir_.claim("monitors.csv");
     std::filesystem::create_directories(dir_ / "output");
     const std::string stamp = "# swmpm " + std::string(version) + " (" + git_hash + "), scene " + scene_.name +
-                              ", formulation " + formulation->name();
+                              ", formulation " + f_->name();
     std::optional<std::size_t> monitor_bytes;
-    if (resume) monitor_bytes = resume->header.at("loop").at("monitor_bytes").get<std::size_t>();
-    Monitors<Dim> monitors(scene_, state_, dir_ / "monitors.csv", stamp, monitor_bytes);
-
-    log_.line("swmpm " + std::string(version) + " (" + git_hash + ") solving " + scene_.name + ": " +
-              formulation->name() + ", " + std::to_string(Dim) + "D, " + scene::to_string(scene_.grid.shape_function) +
-              ", " + std::to_string(state_.solid.size()) + " solid particles" +
-              (state_.fluid.size() ? ", " + std::to_string(state_.fluid.size()) + " water points" : std::string()) +
-              ", " + std::to_string(threads_) + " threads");
-    for (const auto& l : monitors.describe(state_)) log_.line(l);
-
-    std::string dt_reason;
-    const bool auto_dt = !scene_.time.dt.has_value();
-    {
-      const double dt_crit = formulation->critical_time_step(state_, dt_reason);
-      if (auto_dt) {
-        log_.line("dt auto: " + fmt(scene_.time.cfl * dt_crit) + " s = cfl " + fmt(scene_.time.cfl) + " x " +
-                  fmt(dt_crit) + " s, limited by " + dt_reason);
-      } else {
-        log_.line("dt " + fmt(*scene_.time.dt) + " s (critical " + fmt(dt_crit) + " s by " + dt_reason + ")");
-        if (*scene_.time.dt > dt_crit)
-          log_.line("warning: dt exceeds the critical time step; the run may diverge");
-      }
-    }
-
-    std::signal(SIGINT, on_stop_signal);
-    std::signal(SIGTERM, on_stop_signal);  // a scheduler's or `kill`'s stop: as an interrupt
-    const double end = scene_.time.end;
-    const scene::Initialisation& init = scene_.initialisation;
-    const double t_start = init.enabled() ? -init.duration : 0.0;  // the initialisation runs before t = 0
-    const double eps_t = 1e-12 * (end - t_start);
-    bool& initialising = loop_.initialising;
-    initialising = init.enabled();
-    state_.time = t_start;
-    if (initialising) {
-      formulation->set_initialisation(state_, &init);
-      std::ostringstream os;
-      os << "initialisation from t = " << t_start << " s to 0: gravity ramped over " << init.gravity_ramp << " s, "
-         << (init.plasticity ? "plastic flow on" : "elastic (plastic flow off)");
-      if (init.hydraulic_conductivity) os << ", k = " << *init.hydraulic_conductivity << " m/s";
-      if (init.damping) os << ", damping " << *init.damping;
-      if (state_.fluid.size() && init.tie_water) os << ", water points tied to their soil points";
-      log_.line(os.str());
-    }
-    double &next_frame = loop_.next_frame, &next_monitor = loop_.next_monitor, &work = loop_.work;
-    double &dt_min = loop_.dt_min, &dt_max = loop_.dt_max, dt = 0.0;
-    ParticleSet<Dim> last_good, last_good_water;
-    last_good.copy_state_from(state_.solid);
-    last_good_water.copy_state_from(state_.fluid);
-    double last_good_time = t_start;
-    std::string status = "completed", diagnosis;
-    const bool tty = !opt_.quiet && isatty(fileno(stderr));
-    auto last_progress = std::chrono::steady_clock::now();
-    const auto loop_start = last_progress;
-
-    // A write that fails (a full disk, a file size limit, a removed folder) stops the run with
-    // status `failed`: the frames before it are complete, results.pvd lists them, run.json says why.
-    long first_step = 0;  // the step this invocation started from (a resumed run's checkpoint)
-    try {
-    if (!resume) {
-      write_frame(t_start);
-      next_frame = scene_.output.interval > 0 ? t_start + scene_.output.interval : end;
-      monitors.record(state_, *formulation, work);
-      next_monitor = t_start + scene_.output.monitor_interval;
-    }
-
-    // Energy check: kinetic + stored energy can grow only by the work of gravity and loads
-    // (damping, drag and plasticity dissipate). A step that creates energy many times over is an
-    // instability even when every value stays finite (a run may blow up and ring down again).
-    // The external work is integrated every step (trapezoidal rule; the end-of-step power is the
-    // next step's start power, one pass over the particles per step).
-    // A material can also release stored energy below its initial value: Nor-Sand's
-    // pressure-dependent elasticity starts at p_ref at zero elastic strain, so an unloaded body
-    // expands and its stored energy goes negative while kinetic energy rises. The sum is then
-    // conserved only up to the integration error of that exchange, so the largest release so far
-    // is allowed on top (B5's slope undamped, first steps: 0.029 J kinetic, -0.028 J stored, sum
-    // 2.6e-4 J, initial energy and work 0). A blow-up grows past any such bound.
-    double &stored0 = loop_.stored0, &energy0 = loop_.energy0;
-    double &work_max = loop_.work_max, &released_max = loop_.released_max, &power = loop_.power;
-    double& time_carry = loop_.time_carry;  // Kahan compensation of state_.time
-    if (!resume) {
-      stored0 = formulation->strain_energy(state_);
-      energy0 = formulation->kinetic_energy(state_) + stored0;
-      power = formulation->external_power(state_, StepContext{0.0, 0.0, gravity_at(t_start)});
-      loop_.next_restart = t_start + restart_interval();
-    } else {
-      restore(*resume, *formulation);
-      last_good.copy_state_from(state_.solid);  // the checkpoint is a good state
-      last_good_water.copy_state_from(state_.fluid);
-      last_good_time = state_.time;
-      scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);  // without the frames after it
-      log_.line("resumed from the checkpoint at step " + std::to_string(state_.step) + ", t = " + fmt(state_.time, 10) +
-                " s (" + std::to_string(loop_.frame_count) + " frames kept)");
-    }
-    first_step = state_.step;
-    auto energy_created = [&]() -> bool {
-      const double stored = formulation->strain_energy(state_);
-      const double e = formulation->kinetic_energy(state_) + stored;
-      released_max = std::max(released_max, stored0 - stored);
-      const double allowed = kEnergyFactor * (energy0 + work_max) + released_max + kEnergyFloor;
-      if (e <= allowed) return false;
-      std::ostringstream os;
-      os << "energy check: kinetic + stored energy " << e << " J at t = " << state_.time << " s (step "
-         << state_.step << ") is more than " << kEnergyFactor << " x (initial energy " << energy0
-         << " J + largest external work so far " << work_max << " J) + the largest release of stored energy "
-         << released_max << " J: the scheme is creating energy, i.e. it is unstable (reduce dt or time.cfl)";
-      diagnosis = os.str();
-      return true;
-    };
-
-    const bool monitors_read_output_fields = monitors.reads_output_fields();
-    while (state_.time < end - eps_t) {
-      if (g_interrupted) {
-        status = "interrupted";
-        break;
-      }
-      if (auto_dt) {
-        std::string reason;
-        dt = scene_.time.cfl * formulation->critical_time_step(state_, reason);
-      } else {
-        dt = *scene_.time.dt;
-      }
-      const double dt_stable = dt;  // before the last step is shortened to land on time.end (or on 0)
-      // Land on the phase's end (time.end, or 0 after the initialisation): a step that reaches it,
-      // or falls short of it only by the round-off of the summed steps (t = 1 - 2e-12 after 1e5
-      // steps of 1e-5 s), ends exactly there; no sliver step follows.
-      const double target = initialising ? 0.0 : end;
-      const bool lands = target - state_.time <= dt * (1.0 + 1e-6);
-      if (lands) dt = target - state_.time;
-      StepContext ctx{load_clock(state_.time), dt, gravity_at(state_.time)};
-      formulation->step(state_, ctx);
-      if (!state_.health.ok()) {
-        status = "diverged";
-        diagnosis = describe_failure(last_good, last_good_water, ctx);
-        break;
-      }
-      {  // trapezoidal rule on the power of external forces
-        StepContext end_ctx{load_clock(state_.time + dt), dt, gravity_at(state_.time + dt)};
-        const double power_end = formulation->external_power(state_, end_ctx);
-        work += 0.5 * dt * (power + power_end);
-        power = power_end;
-        work_max = std::max(work_max, work);
-      }
-      if (lands) {
-        state_.time = target;
-        time_carry = 0.0;
-      } else {  // compensated (Kahan) sum: t stays within round-off of the exact sum of the steps
-        const double y = dt - time_carry, t_new = state_.time + y;
-        time_carry = (t_new - state_.time) - y;
-        state_.time = t_new;
-      }
-      ++state_.step;
-      dt_min = std::min(dt_min, dt_stable);
-      dt_max = std::max(dt_max, dt_stable);
-
-      bool phase_ended = false;
-      if (initialising && state_.time >= -eps_t) {  // t = 0: the analysis starts from this state
-        state_.time = 0.0;
-        time_carry = 0.0;
-        initialising = false;
-        phase_ended = true;
-        formulation->set_initialisation(state_, nullptr);
-        if (init.reset_displacement) {
-          state_.solid.x0 = state_.solid.x;
-          state_.fluid.x0 = state_.fluid.x;
-        }
-        std::ostringstream os;
-        os << "initialisation done after " << state_.step << " steps: kinetic energy "
-           << formulation->kinetic_energy(state_) << " J, stored " << formulation->strain_energy(state_)
-           << " J; the analysis starts at t = 0" << (init.reset_displacement ? " (displacements measured from here)" : "");
-        log_.line(os.str());
-      }
-      const bool checkpoint = state_.step % scene_.solver.checkpoint_every == 0;
-      const bool frame_due = state_.time >= next_frame - eps_t || state_.time >= end - eps_t || phase_ended;
-      if ((state_.step % kEnergyCheckEvery == 0 || checkpoint || frame_due) && energy_created()) {
-        status = "diverged";
-        break;
-      }
-      const bool monitor_due = state_.time >= next_monitor - eps_t || phase_ended;
-      // Restart checkpoints on disk: every output.checkpoint_interval, or with every frame.
-      const bool restart_due = state_.time < end - eps_t &&
-                               (scene_.output.checkpoint_interval ? state_.time >= loop_.next_restart - eps_t : frame_due);
-      if (checkpoint || frame_due || restart_due || (monitor_due && monitors_read_output_fields))
-        formulation->complete_output_fields(state_, checkpoint || frame_due || restart_due);
-      if (checkpoint) {
-        last_good.copy_state_from(state_.solid);  // reuses capacity: no allocation after the first copy
-        last_good_water.copy_state_from(state_.fluid);
-        last_good_time = state_.time;
-      }
-      if (monitor_due) {
-        monitors.record(state_, *formulation, work);
-        next_monitor += scene_.output.monitor_interval;
-        if (scene_.output.monitor_interval > 0)
-          while (next_monitor <= state_.time + eps_t) next_monitor += scene_.output.monitor_interval;
-      }
-      if (frame_due) {
-        write_frame(state_.time);
-        if (scene_.output.interval > 0)
-          while (next_frame <= state_.time + eps_t) next_frame += scene_.output.interval;
-        else
-          next_frame = end;
-      }
-      if (restart_due) {
-        while (loop_.next_restart <= state_.time + eps_t) loop_.next_restart += restart_interval();
-        write_checkpoint(*formulation, monitors);
-      }
-      if (tty) {
-        const auto now = std::chrono::steady_clock::now();
-        if (std::chrono::duration<double>(now - last_progress).count() > 0.5) {
-          last_progress = now;
-          const double el = std::chrono::duration<double>(now - loop_start).count();
-          const double rate = static_cast<double>(state_.step) / el;
-          const double eta = el * (end - state_.time) / std::max(state_.time - t_start, 1e-300);
-          std::fprintf(stderr, "\r  t = %.4g / %.4g s | step %ld | %.0f steps/s | ETA %.0f s   ", state_.time, end,
-                       state_.step, rate, eta);
-          std::fflush(stderr);
-        }
-      }
-    }
-    if (tty) std::fprintf(stderr, "\r%*s\r", 90, "");
-
-    if (status == "diverged") {
-      log_.failure("DIVERGED: " + diagnosis);
-      // Every frame written so far passed the checks; the snapshot is newer only if it was taken
-      // after the last frame. Either way the series ends with the last good state, in time order.
-      if (frames_.empty() || last_good_time > frames_.back().time) {
-        ParticleSet<Dim> failed = std::move(state_.solid), failed_water = std::move(state_.fluid);
-        state_.solid = std::move(last_good);
-        state_.fluid = std::move(last_good_water);
-        write_frame(last_good_time);
-        state_.solid = std::move(failed);
-        state_.fluid = std::move(failed_water);
-      }
-      last_good_frame_time_ = frames_.back().time;
-      log_.line("the last frame (t = " + fmt(last_good_frame_time_) + " s) is the last good state; the run failed in step " +
-                std::to_string(state_.step + 1));
-    } else if (status == "interrupted") {
-      formulation->complete_output_fields(state_, true);
-      write_frame(state_.time);
-      log_.failure(std::string("interrupted by ") + (g_interrupted == SIGTERM ? "SIGTERM" : "SIGINT") + " at t = " +
-                   fmt(state_.time) + " s; wrote the current state as the final frame");
-    } else if (frames_.empty() || frames_.back().time < state_.time - eps_t) {
-      formulation->complete_output_fields(state_, true);
-      write_frame(state_.time);
-    }
-    } catch (const files::WriteError& e) {
-      diagnosis = diagnosis.empty() ? e.what() : diagnosis + "; then " + e.what();
-      status = "failed";
-      log_.failure(std::string("FAILED: ") + e.what() + "; the run stops here. " +
-                   (frames_.empty() ? std::string("No frame is complete")
-                                    : "The last complete frame is t = " + fmt(frames_.back().time) + " s") +
-                   " (step " + std::to_string(state_.step) + ")");
-    }
-
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    const double loop_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
-    // interface.md §3: wall microseconds / (particles x steps), all phases counted; the loop-only
-    // figure (no input; frame writing included, frame_seconds says how much) is what the
-    // benchmarks compare (they write the first and last frames only).
-    // Points of both sets count (double-point: soil and water points, as the paper counts them).
-    // A resumed run counts the steps it made itself.
-    const long steps_here = state_.step - first_step;
-    const double particle_steps =
-        static_cast<double>(state_.solid.size() + state_.fluid.size()) * static_cast<double>(steps_here);
-    const double us_pps = steps_here > 0 ? 1e6 * wall / particle_steps : 0.0;
-    const double loop_us_pps = steps_here > 0 ? 1e6 * loop_wall / particle_steps : 0.0;
-
-    nlohmann::ordered_json rj;
-    rj["status"] = status;
-    if (!diagnosis.empty()) rj["diagnosis"] = diagnosis;
-    rj["formulation"] = formulation->name();
-    rj["dimension"] = Dim;
-    rj["shape_function"] = scene::to_string(scene_.grid.shape_function);
-    rj["particles"] = {{"solid", state_.solid.size()}};
-    if (state_.fluid.size()) rj["particles"]["fluid"] = state_.fluid.size();
-    rj["active_cells"] = formulation->active_cells(state_);
-    rj["steps"] = state_.step;
-    if (resume) {
-      rj["resumed_from_step"] = first_step;
-      rj["resumed_from_time"] = resume->header.at("time");
-    }
-    rj["dt"] = auto_dt ? (state_.step ? state_.time / static_cast<double>(state_.step) : 0.0) : *scene_.time.dt;  // mean for "auto"
-    rj["dt_min"] = state_.step ? dt_min : 0.0;
-    rj["dt_max"] = dt_max;
-    rj["dt_limit"] = dt_reason;
-    rj["end_time"] = state_.time;
-    rj["wall_seconds"] = wall;
-    rj["loop_seconds"] = loop_wall;
-    rj["frame_seconds"] = frame_seconds_;
-    rj["checkpoints"] = checkpoints_;
-    rj["checkpoint_seconds"] = checkpoint_seconds_;  // part of loop_seconds
-    rj["threads"] = threads_;
-    rj["us_per_particle_step"] = us_pps;
-    rj["loop_us_per_particle_step"] = loop_us_pps;
-    rj["peak_memory_bytes"] = peak_memory_bytes();
-    rj["particle_bytes"] = state_.solid.size() * state_.solid.bytes_per_particle() +
-                           state_.fluid.size() * state_.fluid.bytes_per_particle();
-    rj["frames"] = static_cast<int>(std::count_if(frames_.begin(), frames_.end(), [](const auto& e) { return e.part == 0; }));
-    if (status == "diverged") rj["last_good_frame_time"] = last_good_frame_time_;
-    nlohmann::ordered_json stages;
-    const auto& st = formulation->stage_times();
-    for (std::size_t k = 0; k < st.names.size(); ++k) stages[st.names[k]] = st.seconds[k];
-    rj["stage_seconds"] = stages;
-    const auto counters = formulation->counters();
-    if (!counters.empty()) {
-      nlohmann::ordered_json cj;
-      for (const auto& c : counters) cj[c.name] = c.value;
-      rj["counters"] = cj;
-    }
-    rj["software_version"] = version;
-    rj["git_hash"] = git_hash;
-    write_run_report(rj.dump(2) + "\n", status);
-
-    try {
-    std::ostringstream summary;
-    summary << status << ": " << state_.step << " steps to t = " << fmt(state_.time) << " s in " << fmt(wall, 4)
-            << " s wall (" << fmt(us_pps, 4) << " us per particle-step, " << fmt(loop_us_pps, 4)
-            << " in the time loop, " << threads_ << " threads)";
-    log_.line(summary.str());
-    std::ostringstream split;
-    double total = 0.0;
-    for (double s : st.seconds) total += s;
-    // Shares of the stages' sum; the stages cover the formulation's step only, so say how much of
-    // the loop that is, and the frames' share (the rest: monitors, energy checks, time-step control).
-    split << "stages (" << fmt(100.0 * total / std::max(loop_wall, 1e-300), 3) << "% of the time loop, "
-          << rj["frames"].get<int>() << " frames " << fmt(100.0 * frame_seconds_ / std::max(loop_wall, 1e-300), 3)
-          << "%; the rest writes monitors and checks energy):";
-    for (std::size_t k = 0; k < st.names.size(); ++k)
-      split << " " << st.names[k] << " " << fmt(100.0 * st.seconds[k] / std::max(total, 1e-300), 3) << "%";
-    log_.line(split.str());
-    for (const auto& c : counters) log_.line(c.name + ": " + fmt(c.value, 6) + (c.unit.empty() ? "" : " " + c.unit));
-    } catch (const files::WriteError& e) {  // log.txt; run.json is already written
-      log_.failure(e.what());
-    }
-    return status == "completed" ? 0 : status == "diverged" ? 3 : status == "interrupted" ? 4 : 5;
+    if (resume_) monitor_bytes = resume_->header.at("loop").at("monitor_bytes").get<std::size_t>();
+    monitors_ = std::make_unique<Monitors<Dim>>(scene_, state_, dir_ / "monitors.csv", stamp, monitor_bytes);
   }
 
- private:
-  /// The time loop's own state between steps (what a checkpoint holds besides the particles and
-  /// the formulation's state).
-  struct Loop {
-    bool initialising = false;
-    double next_frame = 0.0, next_monitor = 0.0, next_restart = 0.0;  // s
-    double work = 0.0, power = 0.0;  // J, W: external work so far, power at the current state
-    double stored0 = 0.0, energy0 = 0.0, work_max = 0.0, released_max = 0.0;  // J: the energy check
-    double dt_min = std::numeric_limits<double>::max(), dt_max = 0.0;        // s
-    double time_carry = 0.0;  // Kahan compensation of the time
-    int frame_count = 0;
-  };
+  /// The run's first lines in the log: what runs, what each monitor follows, the dt.
+  void log_header() {
+    log_.line("swmpm " + std::string(version) + " (" + git_hash + ") solving " + scene_.name + ": " + f_->name() +
+              ", " + std::to_string(Dim) + "D, " + scene::to_string(scene_.grid.shape_function) + ", " +
+              std::to_string(state_.solid.size()) + " solid particles" +
+              (state_.fluid.size() ? ", " + std::to_string(state_.fluid.size()) + " water points" : std::string()) +
+              ", " + std::to_string(threads_) + " threads");
+    for (const auto& l : monitors_->describe(state_)) log_.line(l);
+    const double dt_crit = f_->critical_time_step(state_, dt_reason_);
+    if (clock_.auto_dt) {
+      log_.line("dt auto: " + fmt(scene_.time.cfl * dt_crit) + " s = cfl " + fmt(scene_.time.cfl) + " x " +
+                fmt(dt_crit) + " s, limited by " + dt_reason_);
+    } else {
+      log_.line("dt " + fmt(*scene_.time.dt) + " s (critical " + fmt(dt_crit) + " s by " + dt_reason_ + ")");
+      if (*scene_.time.dt > dt_crit) log_.line("warning: dt exceeds the critical time step; the run may diverge");
+    }
+  }
+
+  // ---- time control ------------------------------------------------------------------------
+
+  /// A fresh run: the initialisation phase (if any) starts, frame 0 and the first monitor row, the
+  /// energy check's initial state, the first snapshot.
+  void start() {
+    state_.time = clock_.t_start;
+    begin_initialisation();
+    take_snapshot(last_good_);  // the initial state is the first good one
+    last_good_time_ = clock_.t_start;
+    write_frame(clock_.t_start);
+    next_frame_ = scene_.output.interval > 0 ? clock_.t_start + scene_.output.interval : clock_.end;
+    monitors_->record(state_, *f_, guard_.work);
+    next_monitor_ = clock_.t_start + scene_.output.monitor_interval;
+    guard_.start(*f_, state_, StepContext{0.0, 0.0, gravity_at(clock_.t_start)});
+    next_restart_ = clock_.t_start + restart_interval();
+    first_step_ = state_.step;
+  }
+
+  /// The initialisation phase (scene.initialisation, if any) starts.
+  void begin_initialisation() {
+    const auto& init = scene_.initialisation;
+    if (!init.enabled()) return;
+    f_->set_initialisation(state_, &init);
+    std::ostringstream os;
+    os << "initialisation from t = " << clock_.t_start << " s to 0: gravity ramped over " << init.gravity_ramp
+       << " s, " << (init.plasticity ? "plastic flow on" : "elastic (plastic flow off)");
+    if (init.hydraulic_conductivity) os << ", k = " << *init.hydraulic_conductivity << " m/s";
+    if (init.damping) os << ", damping " << *init.damping;
+    if (state_.fluid.size() && init.tie_water) os << ", water points tied to their soil points";
+    log_.line(os.str());
+  }
+
+  /// The initialisation phase ends at t = 0: the analysis starts from this state. True if it did.
+  bool end_initialisation_if_due() {
+    if (!clock_.initialising || state_.time < -clock_.eps_t) return false;
+    const auto& init = scene_.initialisation;
+    state_.time = 0.0;
+    clock_.time_carry = 0.0;
+    clock_.initialising = false;
+    f_->set_initialisation(state_, nullptr);
+    if (init.reset_displacement) {
+      state_.solid.x0 = state_.solid.x;
+      state_.fluid.x0 = state_.fluid.x;
+    }
+    std::ostringstream os;
+    os << "initialisation done after " << state_.step << " steps: kinetic energy " << f_->kinetic_energy(state_)
+       << " J, stored " << f_->strain_energy(state_) << " J; the analysis starts at t = 0"
+       << (init.reset_displacement ? " (displacements measured from here)" : "");
+    log_.line(os.str());
+    return true;
+  }
+
+  Due due_after_step(bool phase_ended) const {
+    const double t = state_.time, eps_t = clock_.eps_t;
+    Due d;
+    d.snapshot = state_.step % scene_.solver.checkpoint_every == 0;
+    d.frame = t >= next_frame_ - eps_t || clock_.ended(t) || phase_ended;
+    d.energy_check = state_.step % kEnergyCheckEvery == 0 || d.snapshot || d.frame;
+    d.monitor = t >= next_monitor_ - eps_t || phase_ended;
+    // Restart checkpoints on disk: every output.checkpoint_interval, or with every frame.
+    d.restart = !clock_.ended(t) && (scene_.output.checkpoint_interval ? t >= next_restart_ - eps_t : d.frame);
+    return d;
+  }
 
   double restart_interval() const {
     return scene_.output.checkpoint_interval ? *scene_.output.checkpoint_interval : scene_.time.end;
   }
 
-  static std::string read_text(const fs::path& file) {
-    std::ifstream in(file, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
+  /// Gravity at time t: ramped over `gravity_ramp` from t = 0, or, with an initialisation phase,
+  /// over its `gravity_ramp` from its start at t = -duration (then full from t = 0).
+  std::array<double, 3> gravity_at(double t) const {
+    const auto& in = scene_.initialisation;
+    double r = 1.0;
+    if (in.enabled()) {
+      if (t < 0.0 && in.gravity_ramp > 0.0) r = std::clamp((t + in.duration) / in.gravity_ramp, 0.0, 1.0);
+    } else if (scene_.gravity_ramp > 0.0) {
+      r = std::min(1.0, t / scene_.gravity_ramp);
+    }
+    return {scene_.gravity[0] * r, scene_.gravity[1] * r, scene_.gravity[2] * r};
+  }
+
+  /// The loads' clock: loads act during the initialisation phase (t < 0) as they do at t = 0.
+  static double load_clock(double t) { return std::max(t, 0.0); }
+
+  void show_progress() {
+    if (!tty_) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - last_progress_).count() <= 0.5) return;
+    last_progress_ = now;
+    const double el = std::chrono::duration<double>(now - loop_start_).count();
+    const double rate = static_cast<double>(state_.step) / el;
+    const double eta = el * (clock_.end - state_.time) / std::max(state_.time - clock_.t_start, 1e-300);
+    std::fprintf(stderr, "\r  t = %.4g / %.4g s | step %ld | %.0f steps/s | ETA %.0f s   ", state_.time, clock_.end,
+                 state_.step, rate, eta);
+    std::fflush(stderr);
+  }
+
+  // ---- outputs after a step: snapshot, monitors, frames, restart -----------------------------
+
+  void write_outputs(const Due& due) {
+    // The output-only fields (Formulation::complete_output_fields): the water points' too for
+    // frames, snapshots and monitors that follow water points.
+    const bool water_points = due.snapshot || due.frame || due.restart || (due.monitor && monitors_->reads_water_points());
+    if (water_points || (due.monitor && monitors_->reads_output_fields())) f_->complete_output_fields(state_, water_points);
+    if (due.snapshot) {
+      take_snapshot(last_good_);
+      last_good_time_ = state_.time;
+    }
+    if (due.monitor) {
+      monitors_->record(state_, *f_, guard_.work);
+      next_monitor_ += scene_.output.monitor_interval;
+      if (scene_.output.monitor_interval > 0)
+        while (next_monitor_ <= state_.time + clock_.eps_t) next_monitor_ += scene_.output.monitor_interval;
+    }
+    if (due.frame) {
+      write_frame(state_.time);
+      if (scene_.output.interval > 0)
+        while (next_frame_ <= state_.time + clock_.eps_t) next_frame_ += scene_.output.interval;
+      else
+        next_frame_ = clock_.end;
+    }
+    if (due.restart) {
+      while (next_restart_ <= state_.time + clock_.eps_t) next_restart_ += restart_interval();
+      write_checkpoint();
+    }
+  }
+
+  /// One frame: a VTU per particle set, the formulation's grid fields (Formulation::grid_fields,
+  /// unless `grid` is false), then results.pvd, which lists a frame only once all of its files are
+  /// complete (each is written atomically; a failure throws files::WriteError).
+  void write_frame(double t, bool grid = true) {
+    const auto start = std::chrono::steady_clock::now();
+    const int k = frame_count_++;
+    const std::size_t listed = frames_.size();
+    // The file of a group in this frame, claimed on the ledger and listed (the listing is undone
+    // if a write fails).
+    auto file = [&](const char* group, int part) {
+      char name[64];
+      std::snprintf(name, sizeof name, "%s_%06d.vtu", group, k);
+      run_dir_.claim(std::string("output/") + name);
+      frames_.push_back({t, group, part, name});
+      return (dir_ / "output" / name).string();
+    };
+    try {
+      scene::PointCloud solid = particles_to_cloud(state_.solid);
+      add_material_reports(solid, state_.solid, reporters_);
+      scene::write_vtu(file("solid", 0), solid, compression_);
+      if (state_.fluid.size()) scene::write_vtu(file("fluid", 1), water_points_to_cloud(state_.fluid), compression_);
+      if (grid) {
+        const GridFields nodes = f_->grid_fields(state_);
+        if (!nodes.empty()) scene::write_lattice_vtu(file("grid", 2), nodes.cloud, nodes.nodes, compression_);
+      }
+      run_dir_.claim("output/results.pvd");
+      scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);
+    } catch (...) {
+      frames_.resize(listed);
+      throw;
+    }
+    frame_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  // ---- checkpoints: the in-memory last-good state and the restart file ----------------------
+
+  /// A state the run can continue from, in memory: step, time, the particle sets and the
+  /// formulation's own state (Formulation::save). The last-good snapshot is one; the restart file
+  /// is one plus the loop's state (write_checkpoint). `c` keeps its memory from the last one.
+  void take_snapshot(Checkpoint& c) const {
+    c.clear();
+    c.header["step"] = state_.step;
+    c.header["time"] = state_.time;
+    save_set(c, "solid", state_.solid);
+    save_set(c, "fluid", state_.fluid);
+    f_->save(c);
+  }
+
+  /// Puts a snapshot's particle sets and formulation state in place (the clock is the caller's).
+  void restore_snapshot(const Checkpoint& c) {
+    restore_set(c, "solid", state_.solid);
+    restore_set(c, "fluid", state_.fluid);
+    state_.index_ids();
+    f_->restore(c, state_);
   }
 
   /// RUN_DIR/checkpoint.bin (solver/output/checkpoint.hpp), replaced atomically.
-  void write_checkpoint(const Formulation<Dim>& f, const Monitors<Dim>& monitors) {
+  void write_checkpoint() {
     const auto start = std::chrono::steady_clock::now();
     Checkpoint c;
+    take_snapshot(c);
     c.header["software_version"] = version;
     c.header["git_hash"] = git_hash;
-    c.header["formulation"] = f.name();
+    c.header["formulation"] = f_->name();
     c.header["dimension"] = Dim;
-    c.header["step"] = state_.step;
-    c.header["time"] = state_.time;
     c.header["scene"] = scene_text_;
-    loop_.frame_count = frame_count_;
-    nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+    Json frames = Json::array();
     for (const auto& e : frames_) frames.push_back({e.time, e.group, e.part, e.file});
-    c.header["loop"] = {{"initialising", loop_.initialising}, {"next_frame", loop_.next_frame},
-                        {"next_monitor", loop_.next_monitor}, {"next_restart", loop_.next_restart},
-                        {"work", loop_.work},                 {"power", loop_.power},
-                        {"stored0", loop_.stored0},           {"energy0", loop_.energy0},
-                        {"work_max", loop_.work_max},         {"released_max", loop_.released_max},
-                        {"dt_min", loop_.dt_min},             {"dt_max", loop_.dt_max},
-                        {"time_carry", loop_.time_carry},     {"frame_count", loop_.frame_count},
-                        {"frames", frames},                   {"monitor_bytes", monitors.bytes()}};
-    save_set(c, "solid", state_.solid);
-    save_set(c, "fluid", state_.fluid);
-    f.save(c);
+    Json loop = Json::object();
+    clock_.save(loop);
+    guard_.save(loop);
+    loop["next_frame"] = next_frame_, loop["next_monitor"] = next_monitor_, loop["next_restart"] = next_restart_;
+    loop["frame_count"] = frame_count_;
+    loop["frames"] = frames;
+    loop["monitor_bytes"] = monitors_->bytes();
+    c.header["loop"] = loop;
     run_dir_.claim("checkpoint.bin");
     c.write(dir_ / "checkpoint.bin");
     checkpoint_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -607,82 +634,82 @@ class Runner {
   }
 
   /// Puts the checkpoint's state in place of the run's initial one: the formulation (built from
-  /// the initial particles) gets the initialisation phase as it then was, the particle sets, the
-  /// time loop's state and its own.
-  void restore(const Checkpoint& c, Formulation<Dim>& f) {
+  /// the initial particles) gets the initialisation phase as the run went (started, then ended
+  /// unless the checkpoint is inside it), then the clock, the snapshot (particle sets and the
+  /// formulation's state) and the loop's state. The checkpoint is also the first last-good state;
+  /// results.pvd loses the frames after it.
+  void resume_from_checkpoint() {
+    const Checkpoint& c = *resume_;
     const auto& l = c.header.at("loop");
-    const bool initialising = l.at("initialising");
-    if (!initialising && scene_.initialisation.enabled()) f.set_initialisation(state_, nullptr);
-    restore_set(c, "solid", state_.solid);
-    restore_set(c, "fluid", state_.fluid);
-    state_.index_ids();
+    begin_initialisation();
+    clock_.restore(l);
+    if (!clock_.initialising && scene_.initialisation.enabled()) f_->set_initialisation(state_, nullptr);
     state_.step = c.header.at("step");
     state_.time = c.header.at("time");
-    loop_.initialising = initialising;
-    loop_.next_frame = l.at("next_frame"), loop_.next_monitor = l.at("next_monitor");
-    loop_.next_restart = l.at("next_restart"), loop_.work = l.at("work"), loop_.power = l.at("power");
-    loop_.stored0 = l.at("stored0"), loop_.energy0 = l.at("energy0"), loop_.work_max = l.at("work_max");
-    loop_.released_max = l.at("released_max"), loop_.dt_min = l.at("dt_min"), loop_.dt_max = l.at("dt_max");
-    loop_.time_carry = l.at("time_carry");
-    frame_count_ = loop_.frame_count = l.at("frame_count");
+    restore_snapshot(c);
+    guard_.restore(l);
+    next_frame_ = l.at("next_frame"), next_monitor_ = l.at("next_monitor"), next_restart_ = l.at("next_restart");
+    frame_count_ = l.at("frame_count");
     frames_.clear();
     for (const auto& e : l.at("frames"))
       frames_.push_back({e.at(0).get<double>(), e.at(1).get<std::string>(), e.at(2).get<int>(), e.at(3).get<std::string>()});
-    f.restore(c, state_);
+    last_good_ = c;  // the checkpoint is a good state
+    last_good_time_ = state_.time;
+    scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);  // without the frames after it
+    log_.line("resumed from the checkpoint at step " + std::to_string(state_.step) + ", t = " + fmt(state_.time, 10) +
+              " s (" + std::to_string(frame_count_) + " frames kept)");
+    first_step_ = state_.step;
   }
 
-  /// The final run.json, replacing the `running` one. On a full disk, the padded `running` file
-  /// is overwritten in place (no new block needed); if even that fails, stderr says so.
-  void write_run_report(const std::string& text, std::string& status) {
-    try {
-      run_dir_.write_text("run.json", text, true);
-    } catch (const files::WriteError& e) {
-      const bool in_place = files::overwrite_in_place(dir_ / "run.json", text);
-      log_.failure(std::string(e.what()) + (in_place ? "; wrote it in place of the running one" : "; run.json is stale"));
-      if (!in_place) status = "failed";
-    }
+  static std::string read_text(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
   }
 
-  /// Gravity at time t: ramped over `gravity_ramp` from t = 0, or, with an initialisation phase,
-  /// over its `gravity_ramp` from its start at t = -duration (then full from t = 0).
-  std::array<double, 3> gravity_at(double t) const {
-    const auto& in = scene_.initialisation;
-    double r = 1.0;
-    if (in.enabled()) {
-      if (t < 0.0 && in.gravity_ramp > 0.0) r = std::clamp((t + in.duration) / in.gravity_ramp, 0.0, 1.0);
-    } else if (scene_.gravity_ramp > 0.0) {
-      r = std::min(1.0, t / scene_.gravity_ramp);
-    }
-    return {scene_.gravity[0] * r, scene_.gravity[1] * r, scene_.gravity[2] * r};
+  // ---- failure and the end of the loop -------------------------------------------------------
+
+  void fail(std::string diagnosis) {
+    status_ = "diverged";
+    diagnosis_ = std::move(diagnosis);
   }
 
-  /// The loads' clock: loads act during the initialisation phase (t < 0) as they do at t = 0.
-  static double load_clock(double t) { return std::max(t, 0.0); }
-
-  /// The failed particle, before (the last good snapshot) and now. A "fluid" report names a water
-  /// point of the double-point set (State::fluid) when there is one; otherwise the index is a
-  /// soil point's (single-point formulations carry the pore water on the soil points).
-  std::string describe_failure(const ParticleSet<Dim>& before_solid, const ParticleSet<Dim>& before_fluid,
-                               const StepContext& ctx) const {
+  /// The failed particle, before (the last good snapshot) and now, or the failed grid node. A
+  /// "fluid" report names a water point of the double-point set (State::fluid) when there is one;
+  /// otherwise the index is a soil point's (single-point formulations carry the pore water on the
+  /// soil points).
+  std::string describe_failure(const StepContext& ctx) const {
     const auto& h = state_.health;
+    std::ostringstream os;
+    auto when = [&] {
+      os << " in the step from t = " << state_.time << " s (step " << state_.step + 1 << ", dt = " << ctx.dt << " s)";
+    };
+    if (h.particle < 0 && h.node >= 0) {
+      os << h.phase << " grid node " << h.node << " at (";
+      for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << h.node_x[a];
+      os << ") " << h.what;
+      when();
+      os << ". Try a smaller dt (or cfl), or check the loads and the boundary conditions there.";
+      return os.str();
+    }
     const long p = h.particle;
     const bool water_point = h.phase == "fluid" && p < static_cast<long>(state_.fluid.size());
     const ParticleSet<Dim>& now = water_point ? state_.fluid : state_.solid;
-    const ParticleSet<Dim>& before = water_point ? before_fluid : before_solid;
-    std::ostringstream os;
     if (p < 0 || p >= static_cast<long>(now.size())) {
-      os << h.phase << " " << h.what << " in the step from t = " << state_.time << " s (step " << state_.step + 1
-         << ", dt = " << ctx.dt << " s). Try a smaller dt (or cfl), or check the loads.";
+      os << h.phase << " " << h.what;
+      when();
+      os << ". Try a smaller dt (or cfl), or check the loads.";
       return os.str();
     }
-    // The snapshot may hold the particles in another order: find this one by id.
+    ParticleSet<Dim> before;  // the last good snapshot's set, which may hold the particles in another order
+    restore_set(last_good_, water_point ? "fluid" : "solid", before);
     long q = 0;
     while (q < static_cast<long>(before.size()) && before.id[q] != now.id[p]) ++q;
     const int body = now.body[p];
     os << h.phase << " particle " << now.id[p];
     if (body >= 0 && body < static_cast<int>(scene_.bodies.size())) os << " (body \"" << scene_.bodies[body].name << "\")";
-    os << " " << h.what << " in the step from t = " << state_.time << " s (step " << state_.step + 1 << ", dt = " << ctx.dt
-       << " s); ";
+    os << " " << h.what;
+    when();
+    os << "; ";
     if (q < static_cast<long>(before.size())) {
       os << "it was at (";
       for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << before.x[q][a];
@@ -695,61 +722,185 @@ class Runner {
     return os.str();
   }
 
-  /// One frame: a VTU per particle set, then results.pvd, which lists a frame only once all of its
-  /// files are complete (each is written atomically; a failure throws files::WriteError).
-  void write_frame(double t) {
-    const auto start = std::chrono::steady_clock::now();
-    const int k = frame_count_++;
-    const std::size_t listed = frames_.size();
-    auto write_set = [&](const char* phase, int part, const scene::PointCloud& cloud) {
-      char name[64];
-      std::snprintf(name, sizeof name, "%s_%06d.vtu", phase, k);
-      run_dir_.claim(std::string("output/") + name);
-      scene::write_vtu((dir_ / "output" / name).string(), cloud, compression_);
-      frames_.push_back({t, phase, part, name});
-    };
-    try {
-      scene::PointCloud solid = particles_to_cloud(state_.solid);
-      add_material_reports(solid, state_.solid, reporters_);
-      write_set("solid", 0, solid);
-      if (state_.fluid.size()) write_set("fluid", 1, water_points_to_cloud(state_.fluid));
-      run_dir_.claim("output/results.pvd");
-      scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);
-    } catch (...) {
-      frames_.resize(listed);
-      throw;
+  /// After the loop: a diverged run ends its frames with the last good state, an interrupted one
+  /// with the state at the stop, a completed one with its end state (unless that frame exists).
+  void finish() {
+    if (status_ == "diverged") {
+      log_.failure("DIVERGED: " + diagnosis_);
+      // Every frame written so far passed the checks; the snapshot is newer only if it was taken
+      // after the last frame. Either way the series ends with the last good state, in time order.
+      // Its grid fields are gone (the nodes hold the failed step's): particles only.
+      if (frames_.empty() || last_good_time_ > frames_.back().time) {
+        restore_snapshot(last_good_);
+        write_frame(last_good_time_, false);
+      }
+      last_good_frame_time_ = frames_.back().time;
+      log_.line("the last frame (t = " + fmt(last_good_frame_time_) + " s) is the last good state; the run failed in step " +
+                std::to_string(state_.step + 1));
+    } else if (status_ == "interrupted") {
+      f_->complete_output_fields(state_, true);
+      write_frame(state_.time);
+      log_.failure(std::string("interrupted by ") + (g_interrupted == SIGTERM ? "SIGTERM" : "SIGINT") + " at t = " +
+                   fmt(state_.time) + " s; wrote the current state as the final frame");
+    } else if (frames_.empty() || frames_.back().time < state_.time - clock_.eps_t) {
+      f_->complete_output_fields(state_, true);
+      write_frame(state_.time);
     }
-    frame_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  // ---- the run report: run.json and the log's summary ----------------------------------------
+
+  /// Writes the final run.json and the log's last lines; returns the exit status.
+  int report(std::chrono::steady_clock::time_point wall_start) {
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    const double loop_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start_).count();
+    // interface.md §3: wall microseconds / (particles x steps), all phases counted; the loop-only
+    // figure (no input; frame writing included, frame_seconds says how much) is what the
+    // benchmarks compare (they write the first and last frames only).
+    // Points of both sets count (double-point: soil and water points, as the paper counts them).
+    // A resumed run counts the steps it made itself.
+    const long steps_here = state_.step - first_step_;
+    const double particle_steps =
+        static_cast<double>(state_.solid.size() + state_.fluid.size()) * static_cast<double>(steps_here);
+    const double us_pps = steps_here > 0 ? 1e6 * wall / particle_steps : 0.0;
+    const double loop_us_pps = steps_here > 0 ? 1e6 * loop_wall / particle_steps : 0.0;
+    const int frames = static_cast<int>(std::count_if(frames_.begin(), frames_.end(), [](const auto& e) { return e.part == 0; }));
+
+    Json rj;
+    rj["status"] = status_;
+    if (!diagnosis_.empty()) rj["diagnosis"] = diagnosis_;
+    if (status_ == "diverged" && state_.health.particle < 0 && state_.health.node >= 0) {
+      const auto& x = state_.health.node_x;
+      rj["failed_node"] = {{"index", state_.health.node}, {"position", std::vector<double>(x.begin(), x.begin() + Dim)}};
+    }
+    rj["formulation"] = f_->name();
+    rj["dimension"] = Dim;
+    rj["shape_function"] = scene::to_string(scene_.grid.shape_function);
+    rj["particles"] = {{"solid", state_.solid.size()}};
+    if (state_.fluid.size()) rj["particles"]["fluid"] = state_.fluid.size();
+    rj["active_cells"] = f_->active_cells(state_);
+    rj["steps"] = state_.step;
+    if (resume_) {
+      rj["resumed_from_step"] = first_step_;
+      rj["resumed_from_time"] = resume_->header.at("time");
+    }
+    rj["dt"] = clock_.auto_dt ? (state_.step ? state_.time / static_cast<double>(state_.step) : 0.0)
+                              : *scene_.time.dt;  // mean for "auto"
+    rj["dt_min"] = state_.step ? clock_.dt_min : 0.0;
+    rj["dt_max"] = clock_.dt_max;
+    rj["dt_limit"] = dt_reason_;
+    rj["end_time"] = state_.time;
+    rj["wall_seconds"] = wall;
+    rj["loop_seconds"] = loop_wall;
+    rj["frame_seconds"] = frame_seconds_;
+    rj["checkpoints"] = checkpoints_;
+    rj["checkpoint_seconds"] = checkpoint_seconds_;  // part of loop_seconds
+    rj["threads"] = threads_;
+    rj["us_per_particle_step"] = us_pps;
+    rj["loop_us_per_particle_step"] = loop_us_pps;
+    rj["peak_memory_bytes"] = peak_memory_bytes();
+    rj["particle_bytes"] = state_.solid.size() * state_.solid.bytes_per_particle() +
+                           state_.fluid.size() * state_.fluid.bytes_per_particle();
+    rj["frames"] = frames;
+    if (status_ == "diverged") rj["last_good_frame_time"] = last_good_frame_time_;
+    Json stages;
+    const auto& st = f_->stage_times();
+    for (std::size_t k = 0; k < st.names.size(); ++k) stages[st.names[k]] = st.seconds[k];
+    rj["stage_seconds"] = stages;
+    const auto counters = f_->counters();
+    if (!counters.empty()) {
+      Json cj;
+      for (const auto& c : counters) cj[c.name] = c.value;
+      rj["counters"] = cj;
+    }
+    rj["software_version"] = version;
+    rj["git_hash"] = git_hash;
+    write_run_report(rj.dump(2) + "\n");
+
+    try {
+      std::ostringstream summary;
+      summary << status_ << ": " << state_.step << " steps to t = " << fmt(state_.time) << " s in " << fmt(wall, 4)
+              << " s wall (" << fmt(us_pps, 4) << " us per particle-step, " << fmt(loop_us_pps, 4)
+              << " in the time loop, " << threads_ << " threads)";
+      log_.line(summary.str());
+      std::ostringstream split;
+      double total = 0.0;
+      for (double s : st.seconds) total += s;
+      // Shares of the stages' sum; the stages cover the formulation's step only, so say how much of
+      // the loop that is, and the frames' share (the rest: monitors, energy checks, time-step control).
+      split << "stages (" << fmt(100.0 * total / std::max(loop_wall, 1e-300), 3) << "% of the time loop, " << frames
+            << " frames " << fmt(100.0 * frame_seconds_ / std::max(loop_wall, 1e-300), 3)
+            << "%; the rest writes monitors and checks energy):";
+      for (std::size_t k = 0; k < st.names.size(); ++k)
+        split << " " << st.names[k] << " " << fmt(100.0 * st.seconds[k] / std::max(total, 1e-300), 3) << "%";
+      log_.line(split.str());
+      for (const auto& c : counters) log_.line(c.name + ": " + fmt(c.value, 6) + (c.unit.empty() ? "" : " " + c.unit));
+    } catch (const files::WriteError& e) {  // log.txt; run.json is already written
+      log_.failure(e.what());
+    }
+    return status_ == "completed" ? 0 : status_ == "diverged" ? 3 : status_ == "interrupted" ? 4 : 5;
+  }
+
+  /// The final run.json, replacing the `running` one. On a full disk, the padded `running` file
+  /// is overwritten in place (no new block needed); if even that fails, stderr says so.
+  void write_run_report(const std::string& text) {
+    try {
+      run_dir_.write_text("run.json", text, true);
+    } catch (const files::WriteError& e) {
+      const bool in_place = files::overwrite_in_place(dir_ / "run.json", text);
+      log_.failure(std::string(e.what()) + (in_place ? "; wrote it in place of the running one" : "; run.json is stale"));
+      if (!in_place) status_ = "failed";
+    }
   }
 
   fs::path dir_;
   files::RunDirectory run_dir_;  // the ledger of what swmpm wrote in dir_
   SolveOptions opt_;
+  FormulationFactory<Dim> factory_;  // empty: the scene's formulation
   Log log_;
   scene::Scene scene_;
+  std::string scene_text_;  // RUN_DIR/scene.json as read at the start
   State<Dim> state_;
-  int threads_ = 1;
-  std::vector<scene::PvdEntry> frames_;  // one entry per phase and frame
+  std::unique_ptr<Formulation<Dim>> f_;
+  std::unique_ptr<Monitors<Dim>> monitors_;
+  std::optional<Checkpoint> resume_;  // --resume: the checkpoint the run continues from
   std::vector<std::unique_ptr<MaterialModel<Dim>>> reporters_;  // per scene material, for add_material_reports
   scene::VtuCompression compression_ = scene::VtuCompression::zlib;  // output.compression
+  int threads_ = 1;
+  std::string dt_reason_;
+
+  // The loop's state between steps (what a checkpoint holds besides the snapshot).
+  Clock clock_;
+  EnergyGuard guard_;
+  double next_frame_ = 0.0, next_monitor_ = 0.0, next_restart_ = 0.0;  // s
+  std::vector<scene::PvdEntry> frames_;  // one entry per group and frame
   int frame_count_ = 0;
-  Loop loop_;
-  std::string scene_text_;  // RUN_DIR/scene.json as read at the start
-  double frame_seconds_ = 0.0;
+  Checkpoint last_good_;  // the in-memory last-good snapshot (solver.checkpoint_every)
+  double last_good_time_ = 0.0;
+
+  // The run's outcome and timings.
+  std::string status_ = "completed", diagnosis_;
+  long first_step_ = 0;  // the step this invocation started from (a resumed run's checkpoint)
+  bool tty_ = false;
+  std::chrono::steady_clock::time_point loop_start_, last_progress_;
+  double frame_seconds_ = 0.0;      // wall time spent writing frames (part of loop_seconds)
   double checkpoint_seconds_ = 0.0;  // wall time spent writing restart checkpoints (part of loop_seconds)
-  int checkpoints_ = 0;  // wall time spent writing frames (part of loop_seconds)
+  int checkpoints_ = 0;
   double last_good_frame_time_ = 0.0;
 };
 
 }  // namespace
 
-int solve(const std::string& run_dir, const SolveOptions& options) {
+int solve(const std::string& run_dir, const SolveOptions& options) { return solve(run_dir, options, {}, {}); }
+
+int solve(const std::string& run_dir, const SolveOptions& options, const FormulationFactory<2>& factory_2d,
+          const FormulationFactory<3>& factory_3d) {
   if (!fs::exists(fs::path(run_dir) / "scene.json"))
     throw std::runtime_error(run_dir + ": not a run directory (no scene.json; run `swmpm preprocess` first)");
   if (options.threads > 0) omp_set_num_threads(options.threads);
   const scene::Scene s = scene::load_scene((fs::path(run_dir) / "scene.json").string());
-  if (s.dimension == 2) return Runner<2>(run_dir, options).run();
-  return Runner<3>(run_dir, options).run();
+  if (s.dimension == 2) return Runner<2>(run_dir, options, factory_2d).run();
+  return Runner<3>(run_dir, options, factory_3d).run();
 }
 
 }  // namespace swmpm

@@ -48,6 +48,12 @@ class Checkpoint {
     if (s.count) std::memcpy(static_cast<void*>(v.data()), data_.data() + s.offset, s.count * sizeof(T));
   }
   bool has(const std::string& name) const;
+  /// Empties the checkpoint, keeping its memory (the loop's in-memory snapshot is refilled in place).
+  void clear() {
+    header = nlohmann::ordered_json::object();
+    sections_.clear();
+    data_.clear();
+  }
 
   void write(const std::filesystem::path& path) const;  // atomically; throws files::WriteError
   static Checkpoint read(const std::filesystem::path& path);  // throws CheckpointError

@@ -10,17 +10,20 @@ namespace swmpm {
 template <int Dim>
 Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::filesystem::path& path,
                         const std::string& header_comment, std::optional<std::size_t> resume_bytes) {
-  const auto& ps = st.solid;
   std::ostringstream header;
   header << "time";
   for (std::size_t k = 0; k < s.output.monitors.size(); ++k) {
     const auto& mon = s.output.monitors[k];
     const std::string where = "/output/monitors/" + std::to_string(k);
+    // A water point of the double-point set, or a soil point. Single-point two-phase sets carry
+    // both phases on one point: phase "fluid" reads its fluid fields (velocity, pore pressure).
+    const bool water = mon.points == "water";
+    if (water && st.fluid.size() == 0)
+      throw std::runtime_error(where + "/points: \"water\" needs water points (a double-point formulation)");
+    const auto& ps = water ? st.fluid : st.solid;
     int particle = -1;
-    // Single-point two-phase sets carry both phases on one point: phase "fluid" reads its fluid
-    // fields (velocity, pore pressure); double-point sets are not implemented yet.
     const bool fluid_phase = mon.phase == "fluid";
-    if (fluid_phase && !ps.two_phase())
+    if (fluid_phase && !water && !ps.two_phase())
       throw std::runtime_error(where + "/phase: \"fluid\" is not available in this formulation");
     if (mon.at) {
       double best = std::numeric_limits<double>::max();
@@ -36,20 +39,25 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
       for (std::size_t p = 0; p < ps.size(); ++p)
         if (ps.id[p] == *mon.particle) particle = static_cast<int>(p);
       if (particle < 0)
-        throw std::runtime_error(where + "/particle: no solid particle has id " + std::to_string(*mon.particle));
+        throw std::runtime_error(where + "/particle: no " + (water ? "water point" : "solid particle") + " has id " +
+                                 std::to_string(*mon.particle));
     }
     // Columns refer to the particle by id: formulations may reorder particles (State::index_of_id).
     const std::int64_t pid = particle < 0 ? -1 : ps.id[particle];
     monitor_particle_.push_back(pid);
+    monitor_water_.push_back(water && pid >= 0);
     names_.push_back(mon.name);
     for (const auto& qn : mon.quantities) {
       Column c{pid, Q::disp, 0};
       const auto xyz = std::string("xyz").find(qn.back());
       const int comp = xyz == std::string::npos || static_cast<int>(xyz) >= Dim ? -1 : static_cast<int>(xyz);
       if (qn.rfind("displacement_", 0) == 0) c = {pid, Q::disp, comp};
-      else if (qn.rfind("velocity_", 0) == 0) c = {pid, fluid_phase ? Q::vel_fluid : Q::vel, comp};
-      else if (qn == "pore_pressure" && ps.two_phase()) c = {pid, Q::pore, 0};
-      else if (qn == "porosity" && ps.two_phase()) c = {pid, Q::porosity, 0};
+      else if (qn.rfind("velocity_", 0) == 0) c = {pid, fluid_phase && !water ? Q::vel_fluid : Q::vel, comp};
+      else if (qn == "pore_pressure" && (water || ps.two_phase())) c = {pid, Q::pore, 0};
+      else if (qn == "porosity" && (water || ps.two_phase())) c = {pid, Q::porosity, 0};
+      else if (water && pid >= 0)
+        throw std::runtime_error(where + "/quantities: \"" + qn + "\" is not available on a water point (displacement_*, "
+                                 "velocity_*, pore_pressure, porosity are)");
       else if (qn.rfind("stress_", 0) == 0) {
         static const char* names[] = {"xx", "yy", "zz", "xy", "yz", "xz"};
         int idx = -1;
@@ -68,6 +76,8 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
       if (c.comp < 0) throw std::runtime_error(where + "/quantities: unknown component in \"" + qn + "\"");
       if (c.particle < 0 && c.q < Q::kinetic)
         throw std::runtime_error(where + ": \"" + qn + "\" needs \"at\" or \"particle\"");
+      c.water = water && c.particle >= 0;
+      if (c.water) water_found_.push_back({c.particle, particle});
       columns_.push_back(c);
       header << "," << mon.name << "." << qn;
     }
@@ -89,6 +99,17 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
   double ke = -1.0, se = -1.0;
   for (const Column& c : columns_) {
     double val = 0.0;
+    if (c.water) {  // a water point: its own position, velocity, pore pressure and porosity
+      const auto& ws = st.fluid;
+      const int p = water_index(ws, c.particle);
+      if (p < 0) val = std::numeric_limits<double>::quiet_NaN();  // it left the run (solver.escaped_water)
+      else if (c.q == Q::disp) val = ws.x[p][c.comp] - ws.x0[p][c.comp];
+      else if (c.q == Q::vel) val = ws.v[p][c.comp];
+      else if (c.q == Q::pore) val = ws.p[p];
+      else val = ws.n[p];
+      row_ << "," << val;
+      continue;
+    }
     const int p = c.particle < 0 ? -1 : st.index_of_id[c.particle];
     switch (c.q) {
       case Q::disp: val = ps.x[p][c.comp] - ps.x0[p][c.comp]; break;
@@ -116,16 +137,39 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
 }
 
 template <int Dim>
+int Monitors<Dim>::water_index(const ParticleSet<Dim>& ws, std::int64_t id) {
+  for (auto& [wid, index] : water_found_) {
+    if (wid != id) continue;
+    if (index < 0 || index >= static_cast<int>(ws.size()) || ws.id[index] != id) {
+      index = -1;
+      for (std::size_t p = 0; p < ws.size(); ++p)
+        if (ws.id[p] == id) {
+          index = static_cast<int>(p);
+          break;
+        }
+    }
+    return index;
+  }
+  return -1;
+}
+
+template <int Dim>
 std::vector<std::string> Monitors<Dim>::describe(const State<Dim>& st) const {
   std::vector<std::string> lines;
   for (std::size_t k = 0; k < names_.size(); ++k) {
-    const int p = monitor_particle_[k] < 0 ? -1 : st.index_of_id[monitor_particle_[k]];
+    const bool water = monitor_water_[k];
+    const auto& ps = water ? st.fluid : st.solid;
+    int p = -1;
+    if (water)
+      for (std::size_t q = 0; q < ps.size(); ++q) p = ps.id[q] == monitor_particle_[k] ? static_cast<int>(q) : p;
+    else if (monitor_particle_[k] >= 0)
+      p = st.index_of_id[monitor_particle_[k]];
     std::ostringstream os;
     os << "monitor " << names_[k] << ": ";
     if (p < 0) os << "whole system";
     else {
-      os << "follows solid particle " << st.solid.id[p] << " starting at (";
-      for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << st.solid.x0[p][a];
+      os << "follows " << (water ? "water point " : "solid particle ") << ps.id[p] << " starting at (";
+      for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << ps.x0[p][a];
       os << ")";
     }
     lines.push_back(os.str());

@@ -1,5 +1,6 @@
 // monitors.csv: one row per recorded time, one column per "<monitor>.<quantity>".
-// A point monitor follows one particle: the particle nearest to `at` at t = 0 (or the given id).
+// A point monitor follows one particle: the particle nearest to `at` at t = 0 (or the given id), a
+// soil point, or with `points: "water"` a water point of the double-point set (State::fluid).
 // A global monitor (no `at`, no `particle`) records energies of the whole system.
 #pragma once
 
@@ -31,7 +32,14 @@ class Monitors {
   /// velocity at the soil points: Formulation::complete_output_fields).
   bool reads_output_fields() const {
     for (const auto& c : columns_)
-      if (c.q == Q::pore || c.q == Q::vel_fluid) return true;
+      if (!c.water && (c.q == Q::pore || c.q == Q::vel_fluid)) return true;
+    return false;
+  }
+  /// Whether a column reads a water point's porosity, which the formulation completes for output
+  /// only (complete_output_fields with `water_points`).
+  bool reads_water_points() const {
+    for (const auto& c : columns_)
+      if (c.water && c.q == Q::porosity) return true;
     return false;
   }
   /// One line per point monitor: which particle it follows and where it started.
@@ -43,9 +51,15 @@ class Monitors {
     std::int64_t particle;  // particle id, -1 for global
     Q q;
     int comp;
+    bool water = false;  // a water point's id (State::fluid)
   };
+  /// The current index of water point `id` (the formulation may reorder the set, or remove
+  /// escaped water), or -1: the index found last time when it still holds the id, else a search.
+  int water_index(const ParticleSet<Dim>& ws, std::int64_t id);
   std::vector<std::string> names_;
   std::vector<std::int64_t> monitor_particle_;  // ids, -1 for global
+  std::vector<char> monitor_water_;             // per monitor: follows a water point
+  std::vector<std::pair<std::int64_t, int>> water_found_;  // water point id -> index last found
   std::vector<Column> columns_;
   files::CheckedFile out_;
   std::ostringstream row_;  // one row, formatted before it is written
