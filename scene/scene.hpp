@@ -2,7 +2,7 @@
 //
 // A scene file is parsed and validated once (scene/parse.cpp) into these structs; physics code
 // receives them as const& and never reads JSON. SI units throughout. Every default and range lives
-// in the schema tables in parse.cpp and is documented in docs/scene-format.md.
+// in the schema tables in keys.cpp and is documented in docs/scene-format.md.
 #pragma once
 
 #include <array>
@@ -267,7 +267,7 @@ std::string to_string(Formulation f);
 std::string to_string(ShapeFunction f);
 std::string to_string(MaterialModel m);
 
-/// Every key name declared in the scene schema tables (parse.cpp), sorted, without duplicates.
+/// Every key name declared in the scene schema tables (keys.cpp), sorted, without duplicates.
 std::vector<std::string> schema_keys();
 /// The schema tables as Markdown (one table per object kind: key, type, unit, default, allowed,
 /// meaning); docs/scene-format.md contains them verbatim (checked by a unit test).

@@ -1,6 +1,7 @@
-// Scene parsing and validation (scene/parse.cpp): typed values and defaults of valid scenes, the
-// to_json round trip, one test per class of user error (each asserting the JSON path and a key
-// phrase of the message), and the agreement of docs/scene-format.md with the schema tables.
+// Scene parsing and validation (scene/parse.cpp, validate.cpp, keys.cpp): typed values and
+// defaults of valid scenes, the to_json round trip, one test per class of user error (each
+// asserting the JSON path and a key phrase of the message), and the agreement of
+// docs/scene-format.md with the schema tables.
 // Pure parsing: no files except the load_scene tests and the docs check.
 #include <gtest/gtest.h>
 
