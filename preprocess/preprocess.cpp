@@ -14,6 +14,7 @@
 #include "preprocess/shape.hpp"
 #include "scene/expression.hpp"
 #include "scene/files.hpp"
+#include "scene/formulations.hpp"
 
 namespace fs = std::filesystem;
 
@@ -87,25 +88,7 @@ std::vector<SeedPoint> seed_points(const scene::Scene& s, const std::vector<std:
 
 namespace {
 
-/// Where a formulation keeps the water (docs/architecture.md, "Preprocess in detail").
-struct WaterLayout {
-  bool pore_fluid_on_solid = false;  // single-point: porosity, pore_pressure, fluid_mass, fluid_material on solid.vtu
-  bool fluid_particles = false;      // double-point: fluid.vtu holds the pore fluid and the free water
-  bool free_water_on_grid = false;   // mpm-fem: free water is a grid field, not particles
-};
-
-WaterLayout water_layout(scene::Formulation f) {
-  switch (f) {
-    case scene::Formulation::dry: return {};
-    case scene::Formulation::explicit_single_point:
-    case scene::Formulation::semi_implicit_single_point: return {true, false, false};
-    case scene::Formulation::mpm_fem: return {true, false, true};
-    case scene::Formulation::semi_implicit_double_point:
-    case scene::Formulation::explicit_double_point: return {false, true, false};
-    case scene::Formulation::automatic: break;
-  }
-  throw std::logic_error("preprocess: the formulation was not resolved from \"auto\"");
-}
+using scene::WaterLayout;
 
 /// A single-point particle is a skeleton with water in its pores: it cannot be water alone.
 void reject_free_water(const scene::Scene& s, const std::vector<BodyContent>& content, const WaterLayout& w) {
@@ -258,7 +241,7 @@ scene::PointCloud surface_samples(const scene::Scene& s, const std::vector<std::
 }
 
 Phases seed_phases(const scene::Scene& s) {
-  const WaterLayout w = water_layout(s.formulation);
+  const WaterLayout w = scene::row_of(s.formulation).water;
   std::vector<BodyContent> content;
   for (std::size_t b = 0; b < s.bodies.size(); ++b) content.push_back(body_content(s, b));
   reject_free_water(s, content, w);
@@ -290,16 +273,10 @@ namespace {
 void reject_unused_switches(const std::string& scene_path, const scene::Scene& s) {
   // A scene error (exit 2, one line naming the file and the JSON pointer), like the parser's.
   const auto reject = [&](const std::string& line) { throw scene::SceneError({scene_path + ": " + line}); };
-  // Pressure stabilisations each formulation has (the parser knows the union of them all).
-  const std::string& pressure = s.solver.stabilisation.pressure;
-  const bool semi_implicit = s.formulation == scene::Formulation::semi_implicit_single_point ||
-                             s.formulation == scene::Formulation::semi_implicit_double_point;
-  if (s.formulation == scene::Formulation::explicit_single_point && pressure == "node-remap")
-    reject("/solver/stabilisation/pressure: got \"node-remap\", which belongs to the semi-implicit formulations; "
-           "expected one of none, mfvp-constant, mfvp-linear, mfvp-quadratic, cell-constant");
-  if (semi_implicit && pressure != "node-remap" && pressure != "mfvp-linear" && pressure != "none")
-    reject("/solver/stabilisation/pressure: got \"" + pressure + "\", which " + scene::to_string(s.formulation) +
-           " does not have; expected one of node-remap, mfvp-linear, none");
+  // A formulation that has a row but no solver yet: refused before anything is written.
+  if (!scene::row_of(s.formulation).implemented)
+    reject("/formulation: got \"" + scene::to_string(s.formulation) + "\", which is not implemented in this version; "
+           "expected one of " + scene::implemented_formulations() + " (or \"auto\")");
   // Nor-Sand is a finite-strain model (Borja & Andrade 2006).
   for (std::size_t k = 0; k < s.materials.size(); ++k)
     if (s.materials[k].model == scene::MaterialModel::nor_sand && s.solver.kinematics != "finite-strain")
@@ -311,23 +288,11 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
   const auto& solver = raw["solver"];
   const auto stab = solver.contains("stabilisation") && solver["stabilisation"].is_object() ? solver["stabilisation"]
                                                                                                : nlohmann::json::object();
-  // One rule with the resolved scene (scene::reads_switch), which leaves these keys out.
-  const bool dry = s.formulation == scene::Formulation::dry;
-  if (stab.contains("strain_smoothing") && !scene::reads_switch(s, "strain_smoothing") &&
-      (dry || stab.value("strain_smoothing", false)))
-    reject("/solver/stabilisation/strain_smoothing: cell-average strain smoothing belongs to explicit-single-point "
-           "(seed 000); " +
-           std::string(dry ? "the dry formulation has no pore pressure and uses F-bar (solver.stabilisation.fbar); "
-                             "remove the key"
-                           : scene::to_string(s.formulation) +
-                                 " does not read it (its stabilisation switches are pressure and fbar); remove the "
-                                 "key or set it to false"));
+  // Formulation-specific switches are checked by the parser against the formulation's row
+  // (scene/formulations.hpp); these depend on the other switches and the materials.
   if (stab.contains("fbar_patch") && !scene::reads_switch(s, "fbar_patch"))
     reject("/solver/stabilisation/fbar_patch: the patch size is read only by the modified F-bar (fbar is \"" +
            s.solver.stabilisation.fbar + "\"); remove the key or set fbar to \"modified\"");
-  if (stab.contains("pressure") && !scene::reads_switch(s, "pressure"))
-    reject("/solver/stabilisation/pressure: the dry formulation has no pore pressure to stabilise (F-bar is "
-           "solver.stabilisation.fbar); remove the key");
   if (solver.contains("kinematics") && !scene::reads_switch(s, "kinematics"))
     reject("/solver/kinematics: no material of the scene reads it (linear-elastic follows the Jaumann rate, hencky "
            "is finite strain; only mohr-coulomb and nor-sand read the switch); remove the key");

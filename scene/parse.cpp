@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "scene/formulations.hpp"
 #include "scene/keys.hpp"
 #include "scene/parser.hpp"
 
@@ -44,44 +45,17 @@ Scene SceneParser::parse() {
   parse_solver(top.ok("solver") ? top.get("solver") : json::object(), top.at("solver"));
   if (top.ok("formulation")) resolve_formulation(top.str("formulation"), top.at("formulation"));
   for (const auto& at : water_monitors_)
-    if (s_.formulation != Formulation::semi_implicit_double_point &&
-        s_.formulation != Formulation::explicit_double_point)
+    if (s_.formulation != Formulation::automatic && !row_of(s_.formulation).water.fluid_particles)
       c_.error(at, "got \"water\", but only the double-point formulations have water points; expected \"soil\"");
-  const bool semi_implicit = s_.formulation == Formulation::semi_implicit_single_point ||
-                             s_.formulation == Formulation::semi_implicit_double_point;
-  if (s_.solver.continuity.empty()) s_.solver.continuity = semi_implicit ? "conservative" : "non-conservative";
-  if (s_.solver.continuity == "conservative" && !semi_implicit &&
-      s_.formulation != Formulation::explicit_single_point)
-    c_.error(top.at("solver") + "/continuity",
-             "got \"conservative\", which the two-phase formulations implement; this scene's formulation "
-             "has no pore water (remove the key)");
-  if (s_.solver.escaped_water == "remove" && s_.formulation != Formulation::semi_implicit_double_point)
-    c_.error(top.at("solver") + "/escaped_water",
-             "got \"remove\", which applies to the water points of semi-implicit-double-point; this scene's "
-             "formulation has none (remove the key)");
-  if (!s_.solver.drag_integration.empty() && !semi_implicit)
-    c_.error(top.at("solver") + "/drag_integration",
-             "got \"" + s_.solver.drag_integration +
-                 "\", which applies to the semi-implicit formulations' predictor; this scene's formulation "
-                 "does not use it (remove the key)");
-  if (s_.solver.drag_integration.empty() && semi_implicit) s_.solver.drag_integration = "implicit";
+  // Formulation-specific switches against the formulation's row (scene/formulations.hpp): refused
+  // where the formulation does not read them or lacks the value; unset ones take the row's default.
+  if (s_.formulation != Formulation::automatic) {
+    for (const Problem& p : check_formulation(root_, s_)) c_.error(p.path, p.message);
+    apply_formulation_defaults(s_);
+  }
   if (top.ok("initialisation")) parse_initialisation(top.get("initialisation"), top.at("initialisation"), top);
   if (s_.solver.stabilisation.fbar_patch == 0.0)
     s_.solver.stabilisation.fbar_patch = default_fbar_patch(s_.grid.shape_function);
-  if (s_.solver.stabilisation.pressure.empty()) {
-    // The seeds' choices: seed 000 runs strain smoothing with the multi-field variational
-    // pressure (basis not stated; the linear one is the smallest that keeps A5 bounded with FLIP
-    // 0.99, docs/verification.md), seed 001 the node-wise map/remap of the pressure.
-    switch (s_.formulation) {
-      case Formulation::explicit_single_point: s_.solver.stabilisation.pressure = "mfvp-linear"; break;
-      // Semi-implicit: the node-wise projection with a linear basis (eq. 77 is its constant-basis
-      // case, which biases free-surface nodes: 3.4 % pressure error and 1e-3 m/s of spurious
-      // flow in a hydrostatic layer at rest, where the linear one is exact; docs/verification.md).
-      case Formulation::semi_implicit_single_point:
-      case Formulation::semi_implicit_double_point: s_.solver.stabilisation.pressure = "mfvp-linear"; break;
-      default: s_.solver.stabilisation.pressure = "none"; break;
-    }
-  }
 
   if (!c_.errors.empty()) {
     std::vector<std::string> unique;
@@ -536,11 +510,6 @@ void SceneParser::parse_initialisation(const json& j, const std::string& path, c
                                          "(gravity is full from t = 0; ramp it with initialisation.gravity_ramp)");
   if (o.has("hydraulic_conductivity") && !s_.has_fluid())
     c_.error(o.at("hydraulic_conductivity"), "got a value, but no body has a fluid; remove the key");
-  const bool double_point = s_.formulation == Formulation::semi_implicit_double_point ||
-                            s_.formulation == Formulation::explicit_double_point;
-  if (o.has("tie_water") && !double_point)
-    c_.error(o.at("tie_water"), "got a value, but only double-point formulations have water points to tie "
-                                "(formulation \"" + to_string(s_.formulation) + "\"); remove the key");
 }
 
 // -- formulation ----------------------------------------------------------------------------------

@@ -1,5 +1,6 @@
 // Writing a scene back: to_json, the resolved scene (every default filled in, `auto` resolved) that
 // preprocess writes to RUN_DIR/scene.json and that parses back to the same scene.
+#include "scene/formulations.hpp"
 #include "scene/keys.hpp"
 
 namespace swmpm::scene {
@@ -51,9 +52,8 @@ json geometry_json(const Geometry& g, int dim) {
 }  // namespace
 
 bool reads_switch(const Scene& s, const std::string& key) {
-  const bool dry = s.formulation == Formulation::dry;
-  if (key == "strain_smoothing") return s.formulation == Formulation::explicit_single_point;
-  if (key == "pressure") return !dry;
+  if (key == "strain_smoothing") return row_of(s.formulation).find("/solver/stabilisation/strain_smoothing") != nullptr;
+  if (key == "pressure") return row_of(s.formulation).find("/solver/stabilisation/pressure") != nullptr;
   if (key == "fbar_patch") return s.solver.stabilisation.fbar == "modified";
   if (key == "kinematics") {
     // mohr-coulomb and nor-sand read it (nor-sand: finite strain only), in every formulation; the
@@ -146,8 +146,7 @@ nlohmann::json to_json(const Scene& s) {
                {"reset_displacement", in.reset_displacement}};
     if (in.hydraulic_conductivity) ij["hydraulic_conductivity"] = *in.hydraulic_conductivity;
     if (in.damping) ij["damping"] = *in.damping;
-    if (s.formulation == Formulation::semi_implicit_double_point || s.formulation == Formulation::explicit_double_point)
-      ij["tie_water"] = in.tie_water;
+    if (row_of(s.formulation).find("/initialisation/tie_water")) ij["tie_water"] = in.tie_water;
     j["initialisation"] = ij;
   }
 
@@ -171,8 +170,6 @@ nlohmann::json to_json(const Scene& s) {
   const Solver& sv = s.solver;
   j["solver"] = {{"flip", sv.flip},
                  {"damping", sv.damping},
-                 {"continuity", sv.continuity},
-                 {"escaped_water", sv.escaped_water},
                  {"checkpoint_every", sv.checkpoint_every},
                  {"stabilisation", {{"fbar", sv.stabilisation.fbar}}}};
   if (reads_switch(s, "kinematics")) j["solver"]["kinematics"] = sv.kinematics;
@@ -180,7 +177,11 @@ nlohmann::json to_json(const Scene& s) {
   if (reads_switch(s, "strain_smoothing")) stab["strain_smoothing"] = sv.stabilisation.strain_smoothing;
   if (reads_switch(s, "pressure")) stab["pressure"] = sv.stabilisation.pressure;
   if (reads_switch(s, "fbar_patch")) stab["fbar_patch"] = sv.stabilisation.fbar_patch;
-  if (!sv.drag_integration.empty()) j["solver"]["drag_integration"] = sv.drag_integration;  // semi-implicit only
+  // The formulation-specific switches of the scene's formulation (scene/formulations.hpp).
+  const FormulationRow& row = row_of(s.formulation);
+  if (row.find("/solver/continuity")) j["solver"]["continuity"] = sv.continuity;
+  if (row.find("/solver/escaped_water")) j["solver"]["escaped_water"] = sv.escaped_water;
+  if (row.find("/solver/drag_integration")) j["solver"]["drag_integration"] = sv.drag_integration;
   return j;
 }
 

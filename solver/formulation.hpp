@@ -172,5 +172,7 @@ class Formulation {
 /// The formulation the scene names, for the scene's shape function (chosen here, once).
 template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_formulation(const scene::Scene& s, const State<Dim>& state);
+/// Whether this build has a solver for the formulation (formulations/registry.cpp).
+bool has_solver(scene::Formulation f);
 
 }  // namespace swmpm

@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "scene/files.hpp"
+#include "scene/formulations.hpp"
 #include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 #include "solver/formulation.hpp"
@@ -315,8 +316,7 @@ class Runner {
     if (needs_material_state(scene_)) state_.solid.add_material_state();
     state_.index_ids();
     const fs::path water = dir_ / "particles" / "fluid.vtu";
-    if (scene_.formulation == scene::Formulation::semi_implicit_double_point ||
-        scene_.formulation == scene::Formulation::explicit_double_point) {
+    if (scene::row_of(scene_.formulation).water.fluid_particles) {
       if (!fs::exists(water))
         throw std::runtime_error(water.string() + " is missing: a double-point formulation needs water points; "
                                  "run swmpm preprocess again");

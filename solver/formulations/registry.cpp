@@ -1,5 +1,7 @@
 #include "solver/formulations/registry.hpp"
 
+#include "scene/formulations.hpp"
+
 namespace swmpm {
 
 void StageTimes::add(const char* name, double s) {
@@ -12,17 +14,38 @@ void StageTimes::add(const char* name, double s) {
   seconds.push_back(s);
 }
 
+namespace {
+
+/// The solver of each formulation row (scene/formulations.hpp) that is implemented: one entry a
+/// formulation, and tests/unit check that the two lists agree.
+template <int Dim>
+struct Factory {
+  scene::Formulation id;
+  std::unique_ptr<Formulation<Dim>> (*make)(const scene::Scene&, const State<Dim>&);
+};
+template <int Dim>
+constexpr Factory<Dim> kFactories[] = {
+    {scene::Formulation::dry, make_dry<Dim>},
+    {scene::Formulation::explicit_single_point, make_explicit_single_point<Dim>},
+    {scene::Formulation::semi_implicit_single_point, make_semi_implicit_single_point<Dim>},
+    {scene::Formulation::semi_implicit_double_point, make_semi_implicit_double_point<Dim>},
+};
+
+}  // namespace
+
+bool has_solver(scene::Formulation f) {
+  for (const auto& e : kFactories<2>)
+    if (e.id == f) return true;
+  return false;
+}
+
 template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_formulation(const scene::Scene& s, const State<Dim>& state) {
-  switch (s.formulation) {
-    case scene::Formulation::dry: return make_dry<Dim>(s, state);
-    case scene::Formulation::explicit_single_point: return make_explicit_single_point<Dim>(s, state);
-    case scene::Formulation::semi_implicit_single_point: return make_semi_implicit_single_point<Dim>(s, state);
-    case scene::Formulation::semi_implicit_double_point: return make_semi_implicit_double_point<Dim>(s, state);
-    default:
-      throw std::runtime_error("formulation \"" + scene::to_string(s.formulation) +
-                               "\" is not implemented yet in this version (available: dry, explicit-single-point, semi-implicit-single-point, semi-implicit-double-point)");
-  }
+  for (const auto& e : kFactories<Dim>)
+    if (e.id == s.formulation) return e.make(s, state);
+  throw std::runtime_error("formulation \"" + scene::to_string(s.formulation) +
+                           "\" is not implemented yet in this version (available: " + scene::implemented_formulations() +
+                           ")");
 }
 
 template std::unique_ptr<Formulation<2>> make_formulation<2>(const scene::Scene&, const State<2>&);

@@ -2,49 +2,40 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/UmfPackSupport>
+#include <type_traits>
 
 namespace swmpm::linear {
 
-struct Cholesky::Impl {
-  Eigen::CholmodSupernodalLLT<CscMatrix, Eigen::Lower> llt;
+template <Method M>
+struct Direct<M>::Impl {
+  std::conditional_t<M == Method::cholesky, Eigen::CholmodSupernodalLLT<CscMatrix, Eigen::Lower>,
+                     Eigen::UmfPackLU<CscMatrix>>
+      solver;
 };
 
-Cholesky::Cholesky() : impl_(std::make_unique<Impl>()) {}
-Cholesky::~Cholesky() = default;
+template <Method M>
+Direct<M>::Direct() : impl_(std::make_unique<Impl>()) {}
+template <Method M>
+Direct<M>::~Direct() = default;
 
-void Cholesky::analyse(const CscMatrix& A) {
-  impl_->llt.analyzePattern(A);
+template <Method M>
+void Direct<M>::analyse(const CscMatrix& A) {
+  impl_->solver.analyzePattern(A);
   ++analyses_;
 }
-bool Cholesky::factorise(const CscMatrix& A) {
-  impl_->llt.factorize(A);
+template <Method M>
+bool Direct<M>::factorise(const CscMatrix& A) {
+  impl_->solver.factorize(A);
   ++factorisations_;
-  return impl_->llt.info() == Eigen::Success;
+  return impl_->solver.info() == Eigen::Success;
 }
-bool Cholesky::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
-  x = impl_->llt.solve(b);
-  return impl_->llt.info() == Eigen::Success;
+template <Method M>
+bool Direct<M>::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+  x = impl_->solver.solve(b);
+  return impl_->solver.info() == Eigen::Success;
 }
 
-struct LU::Impl {
-  Eigen::UmfPackLU<CscMatrix> lu;
-};
-
-LU::LU() : impl_(std::make_unique<Impl>()) {}
-LU::~LU() = default;
-
-void LU::analyse(const CscMatrix& A) {
-  impl_->lu.analyzePattern(A);
-  ++analyses_;
-}
-bool LU::factorise(const CscMatrix& A) {
-  impl_->lu.factorize(A);
-  ++factorisations_;
-  return impl_->lu.info() == Eigen::Success;
-}
-bool LU::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
-  x = impl_->lu.solve(b);
-  return impl_->lu.info() == Eigen::Success;
-}
+template class Direct<Method::cholesky>;
+template class Direct<Method::lu>;
 
 }  // namespace swmpm::linear

@@ -16,16 +16,20 @@
 
 namespace swmpm::linear {
 
-class Cholesky {
- public:
-  Cholesky();
-  ~Cholesky();
-  Cholesky(const Cholesky&) = delete;
-  Cholesky& operator=(const Cholesky&) = delete;
+enum class Method { cholesky, lu };
 
-  /// Symbolic analysis of A's pattern (lower triangle).
+template <Method M>
+class Direct {
+ public:
+  Direct();
+  ~Direct();
+  Direct(const Direct&) = delete;
+  Direct& operator=(const Direct&) = delete;
+
+  /// Symbolic analysis of A's pattern (Cholesky: the lower triangle; LU: every entry).
   void analyse(const CscMatrix& A);
-  /// Numeric factorisation of A (the pattern analysed last); false if A is not positive definite.
+  /// Numeric factorisation of A (the pattern analysed last); false if A is singular (Cholesky:
+  /// not positive definite).
   bool factorise(const CscMatrix& A);
   /// x = A^-1 b with the last factor; false if the solve failed.
   bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
@@ -39,27 +43,10 @@ class Cholesky {
   long analyses_ = 0, factorisations_ = 0;
 };
 
-class LU {
- public:
-  LU();
-  ~LU();
-  LU(const LU&) = delete;
-  LU& operator=(const LU&) = delete;
+using Cholesky = Direct<Method::cholesky>;
+using LU = Direct<Method::lu>;
 
-  /// Symbolic analysis of A's pattern (every entry).
-  void analyse(const CscMatrix& A);
-  /// Numeric factorisation of A (the pattern analysed last); false if A is singular.
-  bool factorise(const CscMatrix& A);
-  /// x = A^-1 b with the last factor; false if the solve failed.
-  bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
-
-  long analyses() const { return analyses_; }
-  long factorisations() const { return factorisations_; }
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-  long analyses_ = 0, factorisations_ = 0;
-};
+extern template class Direct<Method::cholesky>;
+extern template class Direct<Method::lu>;
 
 }  // namespace swmpm::linear

@@ -287,7 +287,8 @@ TEST(ResolvedScene, IsValidInputAgainInEveryFormulation) {
 }
 
 // B-splines with one point per cell and axis diverge in the semi-implicit formulations (B1: within
-// 4-9 steps at every cell size): the solver stops before the first step, naming the body's key.
+// 4-9 steps at every cell size): the formulation's row refuses the scene (exit 2, the body's key,
+// nothing written).
 TEST(BadInput, SemiImplicitBsplinesNeedTwoPointsPerCell) {
   json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene.json");
   s["grid"]["shape_function"] = "bspline2";
@@ -296,9 +297,10 @@ TEST(BadInput, SemiImplicitBsplinesNeedTwoPointsPerCell) {
   const fs::path dir = swmpm::testing::scratch("bad-si-bspline-ppc1");
   std::ofstream(dir / "scene.json") << s.dump(2);
   const Result r = swmpm_cmd("-q run " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
-  EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("bodies/0/particles_per_cell"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(dir / "run" / "run.json"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("/bodies/0/particles_per_cell: got 1, which is not available with bspline2"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir / "run" / "particles"));
 }
 
 // The semi-implicit formulations take a prescribed pore pressure as the face nodes' value in their
@@ -326,7 +328,7 @@ TEST(BadInput, SwitchesNoMaterialOrFormulationReads) {
 
   json esp = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi/scene.json");
   esp["solver"]["stabilisation"]["pressure"] = "node-remap";
-  expect_rejected(esp, "node-remap-explicit", "/solver/stabilisation/pressure", "belongs to the semi-implicit");
+  expect_rejected(esp, "node-remap-explicit", "/solver/stabilisation/pressure", "explicit-single-point does not have");
 
   json sic = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene.json");
   sic["solver"]["stabilisation"]["pressure"] = "cell-constant";

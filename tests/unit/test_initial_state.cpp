@@ -328,12 +328,13 @@ TEST(Seeding, DoublePointWritesCoincidentSolidAndFluidSets) {
 }
 
 TEST(Seeding, FreeWaterIsFluidParticlesOnly) {
-  // A run directory that held a saturated scene's solid.vtu before: it must not survive.
-  json sat = saturated_box("explicit-double-point", json::object());
+  // A run directory that held a saturated scene's solid.vtu before: it must not survive (a double-point
+  // formulation that has a solver: preprocess refuses explicit-double-point until it has one).
+  json sat = saturated_box("semi-implicit-double-point", json::object());
   const fs::path first = preprocess_into(sat, "free-water");
   ASSERT_TRUE(fs::exists(first / "particles" / "solid.vtu"));
 
-  json j = base_scene("explicit-double-point");
+  json j = base_scene("semi-implicit-double-point");
   j["bodies"] = json::array({box_body("lake", 0, 0, 2, 1)});
   j["bodies"][0]["fluid"] = "water";
   j["bodies"][0]["initial"] = {{"pore_pressure", "hydrostatic"}};

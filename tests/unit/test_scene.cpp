@@ -475,10 +475,10 @@ TEST(SceneErrors, UnknownEnumerationValuesListTheValidOnes) {
   EXPECT_TRUE(reports(t, "/solver/escaped_water", "expected one of: keep, remove"));
   json u = scene_2d();  // only the double-point water points can leave
   u["solver"]["escaped_water"] = "remove";
-  EXPECT_TRUE(reports(u, "/solver/escaped_water", "applies to the water points of semi-implicit-double-point"));
+  EXPECT_TRUE(reports(u, "/solver/escaped_water", "does not read this switch (read by semi-implicit-double-point)"));
   json v = scene_2d();  // the predictor's drag belongs to the semi-implicit formulations
   v["solver"]["drag_integration"] = "implicit";
-  EXPECT_TRUE(reports(v, "/solver/drag_integration", "applies to the semi-implicit formulations' predictor"));
+  EXPECT_TRUE(reports(v, "/solver/drag_integration", "read by semi-implicit-single-point, semi-implicit-double-point"));
   v["formulation"] = "semi-implicit-double-point";
   v["solver"]["drag_integration"] = "explicit";
   EXPECT_TRUE(reports(v, "/solver/drag_integration", "expected one of: implicit, semi-implicit"));
@@ -490,7 +490,7 @@ TEST(SceneErrors, UnknownEnumerationValuesListTheValidOnes) {
   json d = scene_2d();
   d["formulation"] = "dry";
   d["solver"]["continuity"] = "conservative";
-  EXPECT_TRUE(reports(d, "/solver/continuity", "this scene's formulation has no pore water"));
+  EXPECT_TRUE(reports(d, "/solver/continuity", "dry does not read this switch"));
 }
 
 TEST(SceneErrors, MissingRequiredKeys) {

@@ -192,7 +192,7 @@ TEST(Initialisation, SceneChecks) {
     EXPECT_NE(what.find("/gravity_ramp: got 0.5, expected 0 with an initialisation phase"), std::string::npos);
     EXPECT_NE(what.find("/initialisation/gravity_ramp: got 2, expected a number in [0, duration = 1]"),
               std::string::npos);
-    EXPECT_NE(what.find("/initialisation/tie_water: got a value, but only double-point formulations"),
+    EXPECT_NE(what.find("/initialisation/tie_water: got true, but dry does not read this switch"),
               std::string::npos);
     EXPECT_NE(what.find("/initialisation/hydraulic_conductivity: got a value, but no body has a fluid"),
               std::string::npos);

@@ -73,17 +73,8 @@ class Core : public Formulation<Dim> {
         fbar_(s, grid_) {
     conservative_ = s.solver.continuity != "non-conservative";  // "" (unset): this formulation's default
     implicit_drag_ = s.solver.drag_integration != "semi-implicit";  // "" (unset): the default, implicit
-    if constexpr (Shape::bspline) {
-      // One point per cell and axis under-integrates the B-spline supports (3 or 4 cells wide):
-      // B1 diverges within 4-9 steps at every cell size, both variants (bench/results/
-      // speed-vs-error-b1-*-2026-12-01.md). Two or more points per cell work.
-      const ParticleSet<Dim>& sp = state.solid;
-      for (std::size_t p = 0; p < sp.size(); ++p)
-        if (2.0 * sp.l[p].maxCoeff() > 0.75 * s.grid.cell_size)
-          throw std::runtime_error("bodies/" + std::to_string(sp.body[p]) + "/particles_per_cell: 1 point per cell "
-                                   "and axis is not available with " + scene::to_string(s.grid.shape_function) +
-                                   " in " + name + " (it diverges within 10 steps); use 2 or more, or gimp");
-    }
+    // One point per cell with B-splines and a pore pressure on a named surface are refused by the
+    // formulation's row (scene/formulations.cpp) before anything is written.
     if (!state.solid.two_phase())
       throw std::runtime_error(name + " needs saturated soil points (porosity in particles/solid.vtu): run swmpm "
                                "preprocess with a body that has a solid and a fluid");
@@ -93,10 +84,7 @@ class Core : public Formulation<Dim> {
       const auto& b = s.boundaries[i];
       if (!b.fluid || *b.fluid != scene::FluidBc::pressure) continue;
       const std::string where = "boundaries/" + std::to_string(i) + "/fluid";
-      const int f = scene::grid_face_index(b.on);
-      if (f < 0)
-        throw std::runtime_error(where + ": a prescribed pore pressure on a named surface is not implemented in " +
-                                 name + " yet (grid faces only)");
+      const int f = scene::grid_face_index(b.on);  // a grid face: the row refuses named surfaces
       // The value acts through the face's nodes that carry water: some water must reach the face.
       bool reaches = false;
       for (std::size_t p = 0; p < wet.size() && !reaches; ++p) reaches = domain_ends_on_face(grid_, f, wet.x[p], wet.l[p]);

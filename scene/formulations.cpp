@@ -1,0 +1,187 @@
+#include "scene/formulations.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace swmpm::scene {
+namespace {
+
+const std::vector<std::string> kExplicitPressures = {"none", "mfvp-constant", "mfvp-linear", "mfvp-quadratic",
+                                                     "cell-constant"};
+const std::vector<std::string> kSemiImplicitPressures = {"node-remap", "mfvp-linear", "none"};
+const std::vector<std::string> kContinuity = {"non-conservative", "conservative"};
+
+/// The semi-implicit formulations (seed 001): what their pressure solve and B-spline quadrature
+/// cannot take.
+void check_semi_implicit(const Scene& s, std::vector<Problem>& problems) {
+  const std::string name = to_string(s.formulation);
+  const bool bspline = s.grid.shape_function == ShapeFunction::bspline2 || s.grid.shape_function == ShapeFunction::bspline3;
+  // One point per cell and axis under-integrates the B-spline supports (3 or 4 cells wide): B1
+  // diverges within 4-9 steps at every cell size, both variants (bench/results/
+  // speed-vs-error-b1-*-2026-12-01.md). Two or more points per cell work.
+  if (bspline)
+    for (std::size_t b = 0; b < s.bodies.size(); ++b)
+      if (s.bodies[b].particles_per_cell == 1)
+        problems.push_back({"/bodies/" + std::to_string(b) + "/particles_per_cell",
+                            "got 1, which is not available with " + to_string(s.grid.shape_function) + " in " + name +
+                                " (one point per cell and axis diverges within 10 steps); expected 2 or more, or "
+                                "grid.shape_function \"gimp\""});
+  for (std::size_t i = 0; i < s.boundaries.size(); ++i) {
+    const Boundary& b = s.boundaries[i];
+    if (b.fluid && *b.fluid == FluidBc::pressure && grid_face_index(b.on) < 0)
+      problems.push_back({"/boundaries/" + std::to_string(i) + "/fluid",
+                          "a prescribed pore pressure on a named surface (\"" + b.on + "\") is not implemented in " +
+                              name + " yet; expected a grid face (x_min ... z_max)"});
+  }
+}
+
+/// The scene field behind a string switch (nullptr for a boolean one).
+std::string* string_field(Scene& s, const std::string& path) {
+  if (path == "/solver/stabilisation/pressure") return &s.solver.stabilisation.pressure;
+  if (path == "/solver/continuity") return &s.solver.continuity;
+  if (path == "/solver/drag_integration") return &s.solver.drag_integration;
+  if (path == "/solver/escaped_water") return &s.solver.escaped_water;
+  return nullptr;
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string out;
+  for (const auto& x : v) out += (out.empty() ? "" : ", ") + x;
+  return out;
+}
+
+std::vector<FormulationRow> make_rows() {
+  std::vector<FormulationRow> rows;
+  rows.push_back({.id = Formulation::dry,
+                  .name = "dry",
+                  .paper = "",
+                  .implemented = true,
+                  .coupled = false,
+                  .water = {},
+                  .switches = {},
+                  .check = nullptr});
+  rows.push_back({.id = Formulation::explicit_single_point,
+                  .name = "explicit-single-point",
+                  .paper = "seed 000",
+                  .implemented = true,
+                  .coupled = true,
+                  .water = {.pore_fluid_on_solid = true},
+                  // The seeds' choices: seed 000 runs strain smoothing with the multi-field variational
+                  // pressure (basis not stated; the linear one is the smallest that keeps A5 bounded
+                  // with FLIP 0.99, docs/verification.md).
+                  .switches = {{"/solver/stabilisation/pressure", kExplicitPressures, "mfvp-linear"},
+                               {"/solver/stabilisation/strain_smoothing", {"true", "false"}, "true"},
+                               {"/solver/continuity", kContinuity, "non-conservative"}},
+                  .check = nullptr});
+  // Semi-implicit: the node-wise projection with a linear basis (seed 001's eq. 77 is its
+  // constant-basis case, which biases free-surface nodes: 3.4 % pressure error and 1e-3 m/s of
+  // spurious flow in a hydrostatic layer at rest, where the linear one is exact; docs/verification.md).
+  const std::vector<Switch> semi_implicit = {{"/solver/stabilisation/pressure", kSemiImplicitPressures, "mfvp-linear"},
+                                             {"/solver/continuity", kContinuity, "conservative"},
+                                             {"/solver/drag_integration", {"implicit", "semi-implicit"}, "implicit"}};
+  rows.push_back({.id = Formulation::semi_implicit_single_point,
+                  .name = "semi-implicit-single-point",
+                  .paper = "seed 001",
+                  .implemented = true,
+                  .coupled = true,
+                  .water = {.pore_fluid_on_solid = true},
+                  .switches = semi_implicit,
+                  .check = check_semi_implicit});
+  std::vector<Switch> double_point = semi_implicit;
+  double_point.push_back({"/solver/escaped_water", {"keep", "remove"}, "keep"});
+  double_point.push_back({"/initialisation/tie_water", {"true", "false"}, "true"});
+  rows.push_back({.id = Formulation::semi_implicit_double_point,
+                  .name = "semi-implicit-double-point",
+                  .paper = "seed 001",
+                  .implemented = true,
+                  .coupled = true,
+                  .water = {.fluid_particles = true},
+                  .switches = double_point,
+                  .check = check_semi_implicit});
+  rows.push_back({.id = Formulation::explicit_double_point,
+                  .name = "explicit-double-point",
+                  .paper = "seed 003",
+                  .implemented = false,
+                  .coupled = true,
+                  .water = {.fluid_particles = true},
+                  .switches = {{"/initialisation/tie_water", {"true", "false"}, "true"}},
+                  .check = nullptr});
+  rows.push_back({.id = Formulation::mpm_fem,
+                  .name = "mpm-fem",
+                  .paper = "seed 004",
+                  .implemented = false,
+                  .coupled = true,
+                  .water = {.pore_fluid_on_solid = true, .free_water_on_grid = true},
+                  .switches = {},
+                  .check = nullptr});
+  return rows;
+}
+
+}  // namespace
+
+const Switch* FormulationRow::find(const std::string& path) const {
+  for (const Switch& w : switches)
+    if (w.path == path) return &w;
+  return nullptr;
+}
+
+const std::vector<FormulationRow>& formulation_rows() {
+  static const std::vector<FormulationRow> rows = make_rows();
+  return rows;
+}
+
+const FormulationRow& row_of(Formulation f) {
+  for (const FormulationRow& r : formulation_rows())
+    if (r.id == f) return r;
+  throw std::logic_error("formulation \"" + to_string(f) + "\" has no row (\"auto\" is resolved by the parser)");
+}
+
+std::vector<std::string> formulation_switch_paths() {
+  std::vector<std::string> paths;
+  for (const FormulationRow& r : formulation_rows())
+    for (const Switch& w : r.switches)
+      if (std::find(paths.begin(), paths.end(), w.path) == paths.end()) paths.push_back(w.path);
+  return paths;
+}
+
+std::string implemented_formulations() {
+  std::string out;
+  for (const FormulationRow& r : formulation_rows())
+    if (r.implemented) out += (out.empty() ? "" : ", ") + r.name;
+  return out;
+}
+
+std::vector<Problem> check_formulation(const nlohmann::json& raw, const Scene& s) {
+  std::vector<Problem> problems;
+  const FormulationRow& row = row_of(s.formulation);
+  for (const std::string& path : formulation_switch_paths()) {
+    const nlohmann::json::json_pointer ptr(path);
+    if (!raw.contains(ptr)) continue;
+    const nlohmann::json& v = raw.at(ptr);
+    if (!v.is_string() && !v.is_boolean()) continue;  // a type error, which the schema reports
+    const std::string value = v.is_string() ? v.get<std::string>() : (v.get<bool>() ? "true" : "false");
+    const Switch* w = row.find(path);
+    if (!w) {
+      std::vector<std::string> readers;
+      for (const FormulationRow& r : formulation_rows())
+        if (r.find(path)) readers.push_back(r.name);
+      problems.push_back({path, "got " + v.dump() + ", but " + row.name + " does not read this switch (read by " +
+                                    join(readers) + "); remove the key"});
+    } else if (std::find(w->values.begin(), w->values.end(), value) == w->values.end()) {
+      problems.push_back({path, "got " + v.dump() + ", which " + row.name + " does not have; expected one of " +
+                                    join(w->values)});
+    }
+  }
+  if (row.check) row.check(s, problems);
+  return problems;
+}
+
+void apply_formulation_defaults(Scene& s) {
+  const FormulationRow& row = row_of(s.formulation);
+  for (const Switch& w : row.switches)
+    if (std::string* f = string_field(s, w.path); f && f->empty()) *f = w.def;
+  if (s.solver.stabilisation.pressure.empty()) s.solver.stabilisation.pressure = "none";
+  if (s.solver.continuity.empty()) s.solver.continuity = "non-conservative";
+}
+
+}  // namespace swmpm::scene
