@@ -275,7 +275,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       const Vec<Dim> interaction = conservative_ ? Vec<Dim>((pp * V) * grad_n_[p]) : Vec<Dim>::Zero();
       const Vec<Dim> mb_s = m_s * b - interaction, mb_f = m_f * b + interaction;
       // eq. 12: the Darcy drag n^2 rho_f g / k of the point's permeability (the scene's law).
-      const double drag = wet ? porous::darcy_drag(n, pf.rho_f, pf.perm.at(n, porous::initial_porosity(n, V, ps.V0[p]))) * V : 0.0;
+      const double drag = wet ? porous::darcy_drag(n, pf.rho_f, pf.perm.at_point(n, V, ps.V0[p])) * V : 0.0;
       // Row-factored (shape::for_each_row): grad N = (dwx[a] w_r, wx[a] g_r).
       shape::for_each_row(grid_, sp, [&](std::size_t row, double w_r, const Vec<Dim - 1>& g_r) {
         const Vec<Dim> fs_w = w_r * mb_s - A.template rightCols<Dim - 1>() * g_r, fs_dw = -w_r * A.col(0);

@@ -20,8 +20,11 @@ std::size_t padded(std::size_t n) { return (n + 7) / 8 * 8; }
 void Checkpoint::put_bytes(const std::string& name, std::size_t element_bytes, std::size_t count, const void* data) {
   const std::size_t offset = data_.size();
   const std::size_t bytes = element_bytes * count;
+  // Appended in place (a resize would zero the bytes before the copy overwrites them), then the
+  // zero padding to the next 8-byte boundary.
+  const char* first = static_cast<const char*>(data);
+  if (bytes) data_.insert(data_.end(), first, first + bytes);
   data_.resize(offset + padded(bytes), 0);
-  if (bytes) std::memcpy(data_.data() + offset, data, bytes);
   sections_.push_back({name, element_bytes, count, offset});
 }
 

@@ -20,6 +20,9 @@ namespace swmpm::porous {
 
 constexpr double g_earth = 9.81;  // m/s^2: k = rho_w g kappa / mu, and the Darcy drag rho_w g / k
 
+/// The initial porosity n0 of a point from its current n, V and initial V0 ((1 - n) V is constant).
+inline double initial_porosity(double n, double V, double V0) { return 1.0 - (1.0 - n) * V / V0; }
+
 /// Permeability of one solid material with its pore water.
 struct Permeability {
   enum class Law { constant, kozeny_carman, kozeny_carman_grains, xie_leo };
@@ -40,6 +43,11 @@ struct Permeability {
       }
     }
     return k0;
+  }
+  /// k [m/s] at a point of porosity n, volume V and initial volume V0: its n0 is computed only for
+  /// the laws that read it (the per-point, per-step call of the drag scatters).
+  double at_point(double n, double V, double V0) const {
+    return law == Law::constant ? k0 : at(n, initial_porosity(n, V, V0));
   }
 };
 

@@ -96,7 +96,4 @@ inline double update_skeleton(const MatD<Dim>& L, double dt, Mat3& F, double& V,
   return J;
 }
 
-/// The initial porosity n0 of a point from its current n, V and initial V0 ((1 - n) V is constant).
-inline double initial_porosity(double n, double V, double V0) { return 1.0 - (1.0 - n) * V / V0; }
-
 }  // namespace swmpm::porous

@@ -150,7 +150,7 @@ class Core : public Formulation<Dim> {
     auto& surface = pressure_.surface();
     schedule_.run([&](int p) __attribute__((always_inline)) {
       const double V = ps.V[p], n = ps.n[p], m = ps.m[p];
-      const double k = pore_[ps.material[p]].perm.at(n, porous::initial_porosity(n, V, ps.V0[p]));
+      const double k = pore_[ps.material[p]].perm.at_point(n, V, ps.V0[p]);
       const Mat3 sig = to_matrix(ps.sigma[p]);
       const MatD<Dim> A = V * sig.template topLeftCorner<Dim, Dim>();
       const Vec<Dim> mv = m * ps.v[p];
