@@ -41,6 +41,7 @@ std::string* string_field(Scene& s, const std::string& path) {
   if (path == "/solver/continuity") return &s.solver.continuity;
   if (path == "/solver/drag_integration") return &s.solver.drag_integration;
   if (path == "/solver/escaped_water") return &s.solver.escaped_water;
+  if (path == "/solver/drag") return &s.solver.drag;
   return nullptr;
 }
 
@@ -101,11 +102,13 @@ std::vector<FormulationRow> make_rows() {
   rows.push_back({.id = Formulation::explicit_double_point,
                   .name = "explicit-double-point",
                   .paper = "seed 003",
-                  .implemented = false,
+                  .implemented = true,
                   .coupled = true,
                   .water = {.fluid_particles = true},
-                  .switches = {{"/initialisation/tie_water", {"true", "false"}, "true"}},
-                  .check = nullptr});
+                  .switches = {{"/initialisation/tie_water", {"true", "false"}, "true"},
+                               {"/solver/drag", {"darcy", "ergun"}, "ergun"}},
+                  .check = nullptr,
+                  .material_keys = {"grain_diameter", "ergun_a", "ergun_b", "maximum_porosity", "cavitation_threshold"}});
   rows.push_back({.id = Formulation::mpm_fem,
                   .name = "mpm-fem",
                   .paper = "seed 004",
@@ -172,6 +175,25 @@ std::vector<Problem> check_formulation(const nlohmann::json& raw, const Scene& s
                                     join(w->values)});
     }
   }
+  // Material keys that only some formulations read (the material tables list them for all).
+  if (raw.contains("materials") && raw["materials"].is_array())
+    for (std::size_t i = 0; i < raw["materials"].size(); ++i) {
+      const nlohmann::json& m = raw["materials"][i];
+      if (!m.is_object()) continue;
+      for (const FormulationRow& r : formulation_rows())
+        for (const std::string& key : r.material_keys) {
+          if (!m.contains(key) || std::find(row.material_keys.begin(), row.material_keys.end(), key) != row.material_keys.end())
+            continue;
+          const std::string path = "/materials/" + std::to_string(i) + "/" + key;
+          if (std::any_of(problems.begin(), problems.end(), [&](const Problem& p) { return p.path == path; })) continue;
+          std::vector<std::string> readers;
+          for (const FormulationRow& q : formulation_rows())
+            if (std::find(q.material_keys.begin(), q.material_keys.end(), key) != q.material_keys.end())
+              readers.push_back(q.name);
+          problems.push_back({path, "got " + m[key].dump() + ", but " + row.name +
+                                        " does not read this material key (read by " + join(readers) + "); remove the key"});
+        }
+    }
   if (row.check) row.check(s, problems);
   return problems;
 }

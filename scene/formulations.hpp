@@ -44,6 +44,9 @@ struct FormulationRow {
   std::vector<Switch> switches;
   /// Scene checks of this formulation beyond its switches.
   void (*check)(const Scene& s, std::vector<Problem>& problems) = nullptr;
+  /// Material keys only some formulations read (e.g. `grain_diameter`): a scene whose formulation
+  /// does not list a key it gives is refused, naming who reads it.
+  std::vector<std::string> material_keys = {};
 
   /// This formulation's entry for a switch path, or nullptr when it does not read it.
   const Switch* find(const std::string& path) const;

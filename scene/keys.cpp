@@ -147,6 +147,19 @@ const Table& solid_table() {
            .meaning = "Permeability constant, varying with porosity (Kozeny–Carman: k = C1 n³/(1 − n)², C1 from the "
                       "initial n0 and k0), or with the volume ratio (`xie-leo`: k = k0 J², J = (1 − n0)/(1 − n), the law "
                       "behind Xie & Leo's large-strain consolidation closed form)."},
+          {.name = "grain_diameter", .range = positive, .unit = "m",
+           .meaning = "explicit-double-point: reference grain diameter D; the intrinsic permeability is then Kozeny–Carman's "
+                      "κ = D² n³ / (A (1 − n)²) (seed 003 eq. 11, A = `ergun_a`), at the current porosity with "
+                      "`permeability_law` `kozeny-carman`, at the initial one with `constant` (instead of "
+                      "`hydraulic_conductivity` / `intrinsic_permeability`)."},
+          {.name = "ergun_a", .def = 150.0, .range = positive, .unit = "-",
+           .meaning = "explicit-double-point: Ergun's constant A of the viscous term (and of Kozeny–Carman), seed 003 eqs. 10–11."},
+          {.name = "ergun_b", .def = 1.75, .range = non_negative, .unit = "-",
+           .meaning = "explicit-double-point: Ergun's constant B of the inertial term, β = B / √(κ A n³) (seed 003 eq. 10)."},
+          {.name = "maximum_porosity", .range = open(0, 1), .unit = "-",
+           .meaning = "explicit-double-point: n_max; a solid point whose porosity exceeds it is liquefied (zero "
+                      "effective stress, the pore liquid viscous) until it falls below it again (sedimentation). "
+                      "Absent: the skeleton never liquefies."},
       }};
   return t;
 }
@@ -234,7 +247,11 @@ const Table& fluid_table() {
           {.name = "bulk_modulus", .required = true, .range = positive, .unit = "Pa",
            .meaning = "Fluid bulk modulus K_w."},
           {.name = "dynamic_viscosity", .def = 1.0e-3, .range = positive, .unit = "Pa s",
-           .meaning = "Dynamic viscosity μ (turns `intrinsic_permeability` into conductivity)."},
+           .meaning = "Dynamic viscosity μ (turns `intrinsic_permeability` into conductivity; explicit-double-point: "
+                      "the Newtonian viscosity of free water and the base of a liquefied mixture's)."},
+          {.name = "cavitation_threshold", .def = 0.0, .range = non_negative, .unit = "Pa",
+           .meaning = "explicit-double-point: the largest tension the liquid carries; its pressure is kept at or above "
+                      "−`cavitation_threshold` (seed 003: 0, no tension)."},
       }};
   return t;
 }
@@ -556,6 +573,9 @@ const Table& solver_table() {
                       "form amplifies the relative velocity by about M_w/M_s where the drag is stiff, so a "
                       "node with much more water than soil (free water over soil, a seepage exit) diverges; "
                       "see docs/formulations.md, \"Implicit drag\"."},
+          {.name = "drag", .type = Type::choice, .values = {"darcy", "ergun"},
+           .meaning = "explicit-double-point: the soil–liquid drag, `darcy` n² μ / κ (v_L − v_S) or `ergun` (the "
+                      "default), which adds β n³ ρ_L |v_L − v_S| (v_L − v_S), β = B / √(κ A n³) (seed 003 eqs. 9–10)."},
           {.name = "checkpoint_every", .type = Type::integer, .def = 50, .range = at_least(1),
            .meaning = "Steps between in-memory snapshots of the last good state."},
           {.name = "stabilisation", .type = Type::object,

@@ -178,7 +178,8 @@ void SceneParser::parse_materials(const json& arr, const std::string& path) {
     info.gives_density = o.has("density");
     info.gives_grain_density = o.has("grain_density");
     info.gives_porosity = o.has("porosity");
-    info.gives_permeability = o.has("hydraulic_conductivity") || o.has("intrinsic_permeability");
+    info.gives_permeability =
+      o.has("hydraulic_conductivity") || o.has("intrinsic_permeability") || o.has("grain_diameter");
     if (model && *model != MaterialModel::fluid && o.is_object) check_solid_material(o, m);
 
     if (!m.name.empty()) {
@@ -482,6 +483,7 @@ void SceneParser::parse_solver(const json& j, const std::string& path) {
   sv.continuity = o.str("continuity", "");  // "": the formulation's default (after resolve_formulation)
   sv.escaped_water = o.str("escaped_water", "keep");
   sv.drag_integration = o.str("drag_integration", "");  // "": resolved by formulation in parse()
+  sv.drag = o.str("drag", "");  // "": resolved by formulation in parse()
   sv.checkpoint_every = static_cast<int>(o.num("checkpoint_every", 50.0));
   const Obj st = check_object(c_, o.ok("stabilisation") ? o.get("stabilisation") : json::object(),
                               o.at("stabilisation"), {&stabilisation_table()});

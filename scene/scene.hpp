@@ -183,6 +183,7 @@ struct Solver {
   // Semi-implicit formulations: the drag of the predictor implicit in the water velocity only
   // (semi-implicit, seed 001 eqs. 52-53) or in both phases' velocities (implicit, the default).
   std::string drag_integration;  // "" until parse resolves it by formulation
+  std::string drag;  // explicit-double-point: darcy | ergun ("" until parse resolves it by formulation)
   Stabilisation stabilisation;
   int checkpoint_every = 50;     // steps between in-memory snapshots of the last good state
 };

@@ -182,6 +182,7 @@ nlohmann::json to_json(const Scene& s) {
   if (row.find("/solver/continuity")) j["solver"]["continuity"] = sv.continuity;
   if (row.find("/solver/escaped_water")) j["solver"]["escaped_water"] = sv.escaped_water;
   if (row.find("/solver/drag_integration")) j["solver"]["drag_integration"] = sv.drag_integration;
+  if (row.find("/solver/drag")) j["solver"]["drag"] = sv.drag;
   return j;
 }
 

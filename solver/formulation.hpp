@@ -164,6 +164,10 @@ class Formulation {
   /// once per frame, after complete_output_fields; none by default. Not for the last-good frame
   /// of a diverged run (its nodal values are gone).
   virtual GridFields grid_fields(const State<Dim>& /*s*/) const { return {}; }
+  /// Per-point fields a formulation adds to a frame's particle files beside those of the sets
+  /// (explicit-double-point: `liquefied` on the solid points, `free_surface` on the liquid points).
+  /// Called once per frame, after complete_output_fields; arrays added with the clouds' sizes.
+  virtual void add_point_fields(const State<Dim>& /*s*/, scene::PointCloud& /*solid*/, scene::PointCloud& /*fluid*/) const {}
 
  protected:
   StageTimes times_;

@@ -312,7 +312,11 @@ class Runner {
     scene_text_ = read_text(dir_ / "scene.json");  // what checkpoints record, read once
     clock_ = Clock(scene_);
     const fs::path particles = dir_ / "particles" / "solid.vtu";
-    state_.solid = particles_from_cloud<Dim>(scene::read_vtu(particles.string()), particles.string());
+    // A double-point scene of free water only (a dam break) has no solid points: preprocess
+    // writes no particles/solid.vtu, and the solid set is empty (with its pore-fluid fields).
+    const bool water_points = scene::row_of(scene_.formulation).water.fluid_particles;
+    if (water_points && !fs::exists(particles) && fs::exists(dir_ / "particles" / "fluid.vtu")) state_.solid.add_fluid();
+    else state_.solid = particles_from_cloud<Dim>(scene::read_vtu(particles.string()), particles.string());
     if (needs_material_state(scene_)) state_.solid.add_material_state();
     state_.index_ids();
     const fs::path water = dir_ / "particles" / "fluid.vtu";
@@ -323,7 +327,8 @@ class Runner {
       state_.fluid = particles_from_cloud<Dim>(scene::read_vtu(water.string()), water.string());
       // Semi-implicit water points use neither skeleton nor single-point pore-fluid fields: freed,
       // so reordering and snapshots do not carry them.
-      if (scene_.formulation == scene::Formulation::semi_implicit_double_point) state_.fluid.make_water_points();
+      // explicit-double-point keeps `sigma` on them: the liquid's viscous deviatoric stress.
+      state_.fluid.make_water_points(/*keep_stress=*/scene_.formulation == scene::Formulation::explicit_double_point);
     }
     const fs::path surfaces = dir_ / "particles" / "surfaces.vtu";
     if (!scene::surface_bit_names(scene_).empty()) {
@@ -539,8 +544,12 @@ class Runner {
     try {
       scene::PointCloud solid = particles_to_cloud(state_.solid);
       add_material_reports(solid, state_.solid, reporters_);
+      scene::PointCloud fluid;
+      if (state_.fluid.size()) fluid = water_points_to_cloud(state_.fluid);
+      fluid.points.resize(state_.fluid.size());
+      f_->add_point_fields(state_, solid, fluid);
       scene::write_vtu(file("solid", 0), solid, compression_);
-      if (state_.fluid.size()) scene::write_vtu(file("fluid", 1), water_points_to_cloud(state_.fluid), compression_);
+      if (state_.fluid.size()) scene::write_vtu(file("fluid", 1), fluid, compression_);
       if (grid) {
         const GridFields nodes = f_->grid_fields(state_);
         if (!nodes.empty()) scene::write_lattice_vtu(file("grid", 2), nodes.cloud, nodes.nodes, compression_);

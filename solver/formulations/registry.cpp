@@ -29,6 +29,7 @@ constexpr Factory<Dim> kFactories[] = {
     {scene::Formulation::explicit_single_point, make_explicit_single_point<Dim>},
     {scene::Formulation::semi_implicit_single_point, make_semi_implicit_single_point<Dim>},
     {scene::Formulation::semi_implicit_double_point, make_semi_implicit_double_point<Dim>},
+    {scene::Formulation::explicit_double_point, make_explicit_double_point<Dim>},
 };
 
 }  // namespace

@@ -78,11 +78,13 @@ struct ParticleSet {
   /// Double-point water points (semi-implicit): no skeleton and no pore fluid of their own, so F,
   /// L, sigma, eps_p and the single-point pore-fluid fields m_f, v_f, fluid_material are freed and
   /// stay empty (resize, add_fluid); reordering and snapshots then skip them. The set keeps n and p.
-  void make_water_points() {
+  /// keep_stress: `sigma` stays (explicit-double-point: the liquid's viscous deviatoric stress).
+  void make_water_points(bool keep_stress = false) {
     water_points_ = true;
+    water_stress_ = keep_stress;
     F.clear();
     L.clear();
-    sigma.clear();
+    if (!keep_stress) sigma.clear();
     eps_p.clear();
     m_f.clear();
     v_f.clear();
@@ -102,6 +104,8 @@ struct ParticleSet {
       L.assign(k, MatD<Dim>::Zero());
       sigma.assign(k, Sym::Zero());
       eps_p.assign(k, 0.0);
+    } else if (water_stress_) {
+      sigma.resize(k, Sym::Zero());
     }
     material.resize(k);
     body.resize(k);
@@ -121,7 +125,7 @@ struct ParticleSet {
   std::size_t bytes_per_particle() const {
     if (water_points_)
       return sizeof(std::int64_t) + 4 * sizeof(Vec<Dim>) + 3 * sizeof(double) + 2 * sizeof(std::int32_t) +
-             sizeof(std::uint32_t) + (carries_fluid_ ? 2 * sizeof(double) : 0);
+             sizeof(std::uint32_t) + (carries_fluid_ ? 2 * sizeof(double) : 0) + (water_stress_ ? sizeof(Sym) : 0);
     return sizeof(std::int64_t) + 4 * sizeof(Vec<Dim>) + 3 * sizeof(double) + sizeof(Mat3) +
            sizeof(MatD<Dim>) + sizeof(Sym) + sizeof(double) + 2 * sizeof(std::int32_t) +
            sizeof(std::uint32_t) +
@@ -138,6 +142,7 @@ struct ParticleSet {
     carries_fluid_ = o.carries_fluid_;
     carries_state_ = o.carries_state_;
     water_points_ = o.water_points_;
+    water_stress_ = o.water_stress_;
     L.clear();
   }
 
@@ -145,6 +150,7 @@ struct ParticleSet {
   bool carries_fluid_ = false;
   bool carries_state_ = false;
   bool water_points_ = false;  // make_water_points()
+  bool water_stress_ = false;  // make_water_points(true)
 };
 
 /// Reorders a particle set in place: particle k of the result is particle order[k] before.

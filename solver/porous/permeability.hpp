@@ -73,12 +73,15 @@ inline double conductivity_of(const scene::Material& solid, const scene::Materia
 /// The permeability law of a solid material with its pore water `fluid`, as the scene gives it.
 inline Permeability permeability_of(const scene::Material& solid, const scene::Material& fluid) {
   Permeability p;
-  if (solid.permeability_law == "kozeny-carman" && solid.has("grain_diameter")) {
-    const double D = solid.at("grain_diameter"), A = solid.at("kozeny_carman_constant");
+  if (solid.has("grain_diameter")) {
+    // Seed 003 eq. 11 with A = ergun_a: at the current porosity (kozeny-carman) or held at the
+    // initial porosity's value (constant: the drag study's case (a)).
+    const double D = solid.at("grain_diameter"), A = solid.has("ergun_a") ? solid.at("ergun_a") : 150.0;
     p.law = Permeability::Law::kozeny_carman_grains;
     p.grains = D * D / A * fluid.at("density") * g_earth / fluid.at("dynamic_viscosity");
     const double n0 = solid.at("porosity");
     p.k0 = p.at(n0, n0);
+    if (solid.permeability_law != "kozeny-carman") p.law = Permeability::Law::constant;
     return p;
   }
   p.k0 = conductivity_of(solid, fluid);

@@ -98,7 +98,7 @@ TEST(Porous, PermeabilityLawsByHand) {
   auto s = sand("kozeny-carman");
   s.params.erase("hydraulic_conductivity");
   s.params["grain_diameter"] = 1.0e-3;
-  s.params["kozeny_carman_constant"] = 150.0;
+  s.params["ergun_a"] = 150.0;
   p = porous::permeability_of(s, w);
   EXPECT_EQ(p.law, porous::Permeability::Law::kozeny_carman_grains);
   const double kappa = 1.0e-6 * 0.064 / (150.0 * 0.36);
