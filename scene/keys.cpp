@@ -575,7 +575,7 @@ const Table& solver_table() {
                       "see docs/formulations.md, \"Implicit drag\"."},
           {.name = "drag", .type = Type::choice, .values = {"darcy", "ergun"},
            .meaning = "explicit-double-point: the soil–liquid drag, `darcy` n² μ / κ (v_L − v_S) or `ergun` (the "
-                      "default), which adds β n³ ρ_L |v_L − v_S| (v_L − v_S), β = B / √(κ A n³) (seed 003 eqs. 9–10)."},
+                      "default), which adds β n³ ρ_L ‖v_L − v_S‖ (v_L − v_S), β = B / √(κ A n³) (seed 003 eqs. 9–10)."},
           {.name = "checkpoint_every", .type = Type::integer, .def = 50, .range = at_least(1),
            .meaning = "Steps between in-memory snapshots of the last good state."},
           {.name = "stabilisation", .type = Type::object,

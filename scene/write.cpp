@@ -1,5 +1,7 @@
 // Writing a scene back: to_json, the resolved scene (every default filled in, `auto` resolved) that
 // preprocess writes to RUN_DIR/scene.json and that parses back to the same scene.
+#include <algorithm>
+
 #include "scene/formulations.hpp"
 #include "scene/keys.hpp"
 
@@ -81,7 +83,15 @@ nlohmann::json to_json(const Scene& s) {
   j["materials"] = json::array();
   for (const Material& m : s.materials) {
     json mj = {{"name", m.name}, {"model", to_string(m.model)}};
-    for (const auto& [key, value] : m.params) mj[key] = value;
+    // Keys only some formulations read (their defaults included) are written for those only.
+    const auto& own = row_of(s.formulation).material_keys;
+    for (const auto& [key, value] : m.params) {
+      bool other = false;
+      for (const FormulationRow& r : formulation_rows())
+        other = other || std::find(r.material_keys.begin(), r.material_keys.end(), key) != r.material_keys.end();
+      if (other && std::find(own.begin(), own.end(), key) == own.end()) continue;
+      mj[key] = value;
+    }
     if (m.model != MaterialModel::fluid) mj["permeability_law"] = m.permeability_law;
     j["materials"].push_back(mj);
   }

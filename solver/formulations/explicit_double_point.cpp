@@ -157,6 +157,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
 
     scatter_liquid_mass(ws);                                                                 // (2a)
     scatter_solid(ps, b);                                                                    // (2b)
+    nodal_porosity();
     scatter_liquid_forces(ws, b);                                                            // (2c)
     for (const auto& ff : face_forces_)
       for_each_loaded_node(
@@ -399,9 +400,14 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         s.Vw += N * Vw;
       });
     });
+  }
+  /// The nodal porosity n_I = sum N V_w / sum N V at the nodes with solid, 1 at the others (free
+  /// liquid: its points that have spread apart under the cavitation bound, V > V_w, are not soil).
+  void nodal_porosity() {
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       NodeSums& s = node_[i];
-      s.n = s.V_L > 0.0 ? std::clamp(s.Vw / s.V_L, kMinNodalPorosity, 1.0) : 1.0;
+      const bool soil = solid_.acc[i].m > transfer::empty_node_mass;
+      s.n = soil && s.V_L > 0.0 ? std::clamp(s.Vw / s.V_L, kMinNodalPorosity, 1.0) : 1.0;
     });
   }
   /// The liquid's own volume at a liquid point, m / rho_L(p) with rho_L(p) = rho_L (1 + p / K_L)
@@ -546,7 +552,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
       double nh = 0.0;
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) { nh += N * node_[i].n; });
       const double mu = effective_viscosity(l.mu, nh);
-      double div_s = 0.0, div_l = 0.0, phi = 0.0;
+      double div_s = 0.0, div_l = 0.0, phi = 0.0, soil = 0.0;
       Vec<Dim> w = Vec<Dim>::Zero(), grad_n = Vec<Dim>::Zero();
       MatD<Dim> L = MatD<Dim>::Zero();
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
@@ -558,6 +564,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         w += N * (vl - vs);
         grad_n += s.n * dN;
         phi += N * std::min(1.0, s.V_L / support_[i]);
+        if (solid_.acc[i].m > transfer::empty_node_mass) soil += N;
         if (mu > 0.0) L.noalias() += vl * dN.transpose();
       });
       // eq. 8: the transpose of (2b)'s pressure forces
@@ -580,8 +587,11 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
       ws.sigma[p] = tau;
       // The mixture volume the point stands for follows the liquid (seepage into soil stretches
       // it by 1 / n), and its porosity is the liquid's share of it.
-      ws.V[p] *= 1.0 + dt * div_l;
-      ws.n[p] = std::min(1.0, liquid_volume(ws, static_cast<int>(p)) / ws.V[p]);
+      // Free liquid (no solid in the support) is its own volume: points that spread apart under
+      // the cavitation bound or at the free surface do not become porous.
+      const double Vw = liquid_volume(ws, static_cast<int>(p));
+      ws.V[p] = soil > 0.0 ? ws.V[p] * (1.0 + dt * div_l) : Vw;
+      ws.n[p] = std::min(1.0, Vw / ws.V[p]);
       if (!(ws.V[p] > 0.0)) bad = std::min(bad, p);
       if (!std::isfinite(pp)) bad = std::min(bad, p);
     }

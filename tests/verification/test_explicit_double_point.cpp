@@ -1,0 +1,205 @@
+// explicit-double-point (seed 003): the published and analytic cases of issue 24, each from its
+// example folder (docs/verification.md, "explicit-double-point").
+//   C1  1D consolidation, seed Table 1: double-point against single-point and Terzaghi
+//   E3  dam break of free water against Martin & Moyce (1952), Table 2
+//   hydrostatics: a soil bed under free water at rest for 10 s
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "scene/pointcloud.hpp"
+#include "support/run_helpers.hpp"
+
+namespace {
+
+using nlohmann::json;
+using swmpm::testing::load_json;
+using swmpm::testing::run_scene;
+
+/// monitors.csv as columns by name.
+struct Monitors {
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> rows;
+  std::size_t col(const std::string& n) const {
+    const auto it = std::find(names.begin(), names.end(), n);
+    EXPECT_NE(it, names.end()) << n;
+    return static_cast<std::size_t>(it - names.begin());
+  }
+};
+Monitors read_monitors(const std::string& run) {
+  Monitors m;
+  std::ifstream in(run + "/monitors.csv");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::stringstream ss(line);
+    std::string cell;
+    std::vector<std::string> cells;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    if (m.names.empty()) {
+      m.names = cells;
+      continue;
+    }
+    std::vector<double> r;
+    for (const auto& c : cells) r.push_back(std::stod(c));
+    m.rows.push_back(r);
+  }
+  return m;
+}
+
+/// Terzaghi: p / p0 at depth z below the drained top of a layer of height H = 1 m.
+double terzaghi(double z, double Tv) {
+  double sum = 0.0;
+  for (int m = 0; m < 200; ++m) {
+    const double M = (2 * m + 1) * M_PI / 2;
+    sum += 2.0 / M * std::sin(M * z) * std::exp(-M * M * Tv);
+  }
+  return sum;
+}
+
+}  // namespace
+
+// C1: n = 0.4, kappa = 1.0214e-10 m^2, mu = 1.002e-3 Pa s (k = 1.0e-3 m/s), E = 10 MPa, nu = 0.2,
+// K_L = 21.5 MPa, 40 rows of cells, 10 kPa on a drained top, weightless. c_v with the liquid's
+// storage: k / (gamma_w (1 / E_oed + n / K_L)) = 0.939 m^2/s (the seed's 1.1 leaves out n / K_L).
+TEST(ExplicitDoublePoint, C1ConsolidationMatchesSinglePointAndTerzaghi) {
+  const std::string dir = SWMPM_SOURCE_DIR "/examples/consolidation-double-point/";
+  const auto dp = read_monitors(run_scene(load_json(dir + "scene.json"), "edp-c1-double"));
+  const auto sp = read_monitors(run_scene(load_json(dir + "scene-single-point.json"), "edp-c1-single"));
+  const double k = 1.0214e-10 * 1000.0 * 9.81 / 1.002e-3, E = 1.0e7, nu = 0.2, n = 0.4, K_L = 2.15e7, p0 = 1.0e4;
+  const double E_oed = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)), c_v = k / (9810.0 * (1 / E_oed + n / K_L));
+  ASSERT_EQ(dp.rows.size(), sp.rows.size());
+  const std::pair<const char*, double> gauges[] = {
+      {"base", 0.00625}, {"quarter", 0.25625}, {"mid", 0.50625}, {"three_quarters", 0.75625}};
+  for (const auto& [name, y] : gauges) {
+    const std::size_t cd = dp.col(std::string(name) + ".pore_pressure"), cs = sp.col(std::string(name) + ".pore_pressure");
+    double e_dp = 0, e_sp = 0, diff = 0;
+    int count = 0;
+    for (std::size_t r = 0; r < dp.rows.size(); ++r) {
+      const double t = dp.rows[r][0], Tv = c_v * t;
+      ASSERT_NEAR(t, sp.rows[r][0], 2e-4);  // the row after each 5 ms mark; the two dt differ
+      if (Tv < 0.05) continue;
+      const double ref = p0 * terzaghi(1.0 - y, Tv);
+      e_dp += std::pow((dp.rows[r][cd] - ref) / p0, 2);
+      e_sp += std::pow((sp.rows[r][cs] - ref) / p0, 2);
+      diff = std::max(diff, std::abs(dp.rows[r][cd] - sp.rows[r][cs]) / p0);
+      ++count;
+    }
+    e_dp = std::sqrt(e_dp / count), e_sp = std::sqrt(e_sp / count);
+    std::printf("C1 %s: RMS of p/p0 against Terzaghi double-point %.4f single-point %.4f; max |DP - SP| / p0 %.4f\n",
+                name, e_dp, e_sp, diff);
+    EXPECT_LT(e_dp, 0.02) << name;
+    EXPECT_LT(e_sp, 0.02) << name;
+    EXPECT_LT(diff, 0.01) << name;
+  }
+}
+
+// Hydrostatics: a 0.4 m bed (n = 0.4, k = 1e-3 m/s) under 0.2 m of free water, 10 s at rest.
+// p = rho_w g depth within 1 % in both layers (the two cells around the interface apart, whose
+// points' pressures alternate by a few per cent about it), no spurious flow, the bed's effective
+// stress geostatic.
+TEST(ExplicitDoublePoint, SoilUnderFreeWaterStaysHydrostatic) {
+  const std::string run =
+      run_scene(load_json(SWMPM_SOURCE_DIR "/examples/soil-under-water-double-point/scene.json"), "edp-hydrostatic");
+  const auto water = swmpm::testing::last_frame(run, "fluid");
+  const auto& p = water.get("pore_pressure", "fluid").values;
+  const auto& v = water.get("velocity", "fluid").values;
+  const double rho_g = 1000.0 * 9.81, top = 0.6, H = 0.6, h = 0.05;
+  double worst = 0.0, worst_interface = 0.0, v_max = 0.0;
+  for (std::size_t i = 0; i < water.size(); ++i) {
+    const double y = water.points[i][1], expected = rho_g * (top - y);
+    const double err = std::abs(p[i] - expected) / (rho_g * H);
+    if (std::abs(y - 0.4) < h) worst_interface = std::max(worst_interface, err);
+    else worst = std::max(worst, err);
+    v_max = std::max(v_max, std::hypot(v[3 * i], v[3 * i + 1]));
+  }
+  // The error relative to the base pressure (p / rho_w g H), away from the interface and at it.
+  std::printf("hydrostatics: max |p - rho g d| / (rho g H) %.4f (interface cells %.4f), max |v_w| %.2e m/s\n", worst,
+              worst_interface, v_max);
+  EXPECT_LT(worst, 0.01);
+  EXPECT_LT(worst_interface, 0.06);
+  EXPECT_LT(v_max, 1e-3 * std::sqrt(9.81 * H));
+  const auto soil = swmpm::testing::last_frame(run, "solid");
+  const auto& s = soil.get("stress", "solid").values;
+  const auto& vs = soil.get("velocity", "solid").values;
+  double s_err = 0.0, vs_max = 0.0;
+  for (std::size_t i = 0; i < soil.size(); ++i) {
+    const double y = soil.points[i][1];
+    const double expected = -(0.6 * (2650.0 - 1000.0)) * 9.81 * (0.4 - y);  // buoyant weight
+    if (y < 0.4 - h) s_err = std::max(s_err, std::abs(s[6 * i + 1] - expected) / (0.6 * 1650.0 * 9.81 * 0.4));
+    vs_max = std::max(vs_max, std::hypot(vs[3 * i], vs[3 * i + 1]));
+  }
+  std::printf("hydrostatics: max |sigma'_yy - geostatic| / sigma'_base %.4f below the top cell, max |v_s| %.2e m/s\n",
+              s_err, vs_max);
+  EXPECT_LT(s_err, 0.03);
+  EXPECT_LT(vs_max, 1e-3 * std::sqrt(9.81 * H));
+}
+
+// E3: a column of water a = 57.15 mm wide and 2a high collapses onto a dry floor. The surge front
+// (the farthest liquid point) against Martin & Moyce (1952), Table 2, at T = t sqrt(2 g / a) >= 1;
+// the liquid's mass is constant by construction, its volume through the pressure within 0.1 %.
+TEST(ExplicitDoublePoint, E3DamBreakFrontFollowsMartinAndMoyce) {
+  const json scene = load_json(SWMPM_SOURCE_DIR "/examples/dam-break-double-point/scene.json");
+  const std::string run = run_scene(scene, "edp-dam-break");
+  // Martin & Moyce's front Z = x / a against T (refdata/martin_moyce_1952_front.csv).
+  std::vector<std::pair<double, double>> ref;
+  std::ifstream in(SWMPM_SOURCE_DIR "/../shared/refdata/martin_moyce_1952_front.csv");
+  std::string line;
+  while (std::getline(in, line))
+    if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) {
+      const auto comma = line.find(',');
+      ref.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
+    }
+  ASSERT_GE(ref.size(), 10u) << "refdata not found";
+  const double a = 0.05715, g = 9.81;
+  int compared = 0;
+  double worst = 0.0;
+  for (const auto& e : swmpm::scene::read_pvd(run + "/output/results.pvd")) {
+    if (e.group != "fluid") continue;
+    const double T = e.time * std::sqrt(2 * g / a);
+    if (T < 1.0 || T > ref.back().first) continue;
+    const auto f = swmpm::scene::read_vtu(run + "/output/" + e.file);
+    double x = 0.0;
+    for (std::size_t i = 0; i < f.size(); ++i) x = std::max(x, f.points[i][0]);
+    double Z = 0.0;
+    for (std::size_t k = 1; k < ref.size(); ++k)
+      if (T <= ref[k].first) {
+        Z = ref[k - 1].second + (ref[k].second - ref[k - 1].second) * (T - ref[k - 1].first) / (ref[k].first - ref[k - 1].first);
+        break;
+      }
+    const double err = (x / a - Z) / Z;
+    std::printf("E3: T = %.2f, x/a = %.3f, Martin & Moyce %.3f (%+.1f %%)\n", T, x / a, Z, 100 * err);
+    worst = std::max(worst, std::abs(err));
+    ++compared;
+  }
+  EXPECT_GE(compared, 6);
+  EXPECT_LT(worst, 0.10);
+  // Volume: the liquid's own, sum m / rho (1 - p / K), and the volume its points occupy, sum V
+  // (each point's V follows the liquid's velocity divergence), at the end against the start.
+  const auto first = [&] {
+    for (const auto& e : swmpm::scene::read_pvd(run + "/output/results.pvd"))
+      if (e.group == "fluid") return swmpm::scene::read_vtu(run + "/output/" + e.file);
+    return swmpm::scene::PointCloud{};
+  }();
+  const auto last = swmpm::testing::last_frame(run, "fluid");
+  auto volumes = [](const swmpm::scene::PointCloud& f) {
+    const auto& m = f.get("mass", "fluid").values;
+    const auto& p = f.get("pore_pressure", "fluid").values;
+    const auto& V = f.get("volume", "fluid").values;
+    double own = 0.0, occupied = 0.0;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      own += m[i] / 1000.0 * (1.0 - p[i] / 2.0e6);
+      occupied += V[i];
+    }
+    return std::pair{own, occupied};
+  };
+  const auto [own0, occ0] = volumes(first);
+  const auto [own1, occ1] = volumes(last);
+  std::printf("E3: liquid volume %.6g -> %.6g m^2 (%+.3f %%), occupied %.6g -> %.6g m^2 (%+.3f %%)\n", own0, own1,
+              100 * (own1 / own0 - 1), occ0, occ1, 100 * (occ1 / occ0 - 1));
+  EXPECT_NEAR(own1 / own0, 1.0, 1e-3);
+  EXPECT_NEAR(occ1 / occ0, 1.0, 0.02);
+}
