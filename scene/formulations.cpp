@@ -106,7 +106,8 @@ std::vector<FormulationRow> make_rows() {
                   .coupled = true,
                   .water = {.fluid_particles = true},
                   .switches = {{"/initialisation/tie_water", {"true", "false"}, "true"},
-                               {"/solver/drag", {"darcy", "ergun"}, "ergun"}},
+                               {"/solver/drag", {"darcy", "ergun"}, "ergun"},
+                               {"/solver/stabilisation/pressure", {"none", "mfvp-constant", "mfvp-linear"}, "mfvp-linear"}},
                   .check = nullptr,
                   .material_keys = {"grain_diameter", "ergun_a", "ergun_b", "maximum_porosity", "cavitation_threshold"}});
   rows.push_back({.id = Formulation::mpm_fem,

@@ -621,7 +621,8 @@ const Table& stabilisation_table() {
           {.name = "pressure", .type = Type::choice,
            .values = {"none", "mfvp-constant", "mfvp-linear", "mfvp-quadratic", "node-remap", "cell-constant"},
            .meaning = "Pore-pressure stabilisation; default by formulation: `mfvp-linear` "
-                      "(explicit-single-point and semi-implicit), `none` otherwise. `cell-constant` "
+                      "(explicit-single-point, semi-implicit, explicit-double-point: on the liquid points' "
+                      "pressure rate), `none` otherwise. `cell-constant` "
                       "(explicit-single-point): one pressure per grid cell, its rate the exact transpose of "
                       "the pressure forces (docs/formulations.md)."},
           {.name = "fbar", .type = Type::choice, .def = "none", .values = {"none", "standard", "modified"},

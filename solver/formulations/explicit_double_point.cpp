@@ -42,6 +42,7 @@
 #include "solver/porous/porosity.hpp"
 #include "solver/porous/tie.hpp"
 #include "solver/transfer/fbar.hpp"
+#include "solver/transfer/projection.hpp"
 #include "solver/transfer/transfer.hpp"
 
 namespace swmpm {
@@ -97,6 +98,8 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
       throw std::runtime_error("explicit-double-point needs liquid points (particles/fluid.vtu): give a body a "
                                "\"fluid\", then run swmpm preprocess again");
     drag_.kind = s.solver.drag == "darcy" ? porous::DragLaw::Kind::darcy : porous::DragLaw::Kind::ergun;
+    const auto& pressure = s.solver.stabilisation.pressure;
+    mfvp_order_ = pressure == "none" ? -1 : pressure == "mfvp-constant" ? 0 : 1;
     liquid_.resize(s.materials.size());
     int first_fluid = -1;
     for (std::size_t k = 0; k < s.materials.size(); ++k) {
@@ -545,8 +548,10 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
   long update_liquid(ParticleSet<Dim>& ws, double dt) {
     const long n = static_cast<long>(ws.size());
     free_surface_.resize(ws.size());
-    long bad = transfer::no_particle;
-#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+    rate_.resize(ws.size());
+    div_l_.resize(ws.size());
+    soil_.resize(ws.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       const Liquid& l = liquid_[ws.material[p]];
       double nh = 0.0;
@@ -567,15 +572,15 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         if (solid_.acc[i].m > transfer::empty_node_mass) soil += N;
         if (mu > 0.0) L.noalias() += vl * dN.transpose();
       });
-      // eq. 8: the transpose of (2b)'s pressure forces
+      // eq. 8: the transpose of (2c)'s pressure forces
       const double div_q = nh * div_l + (1.0 - nh) * div_s + grad_n.dot(w);
-      double pp = ws.p[p] - l.K / nh * div_q * dt;
-      pp = std::max(pp, -l.cavitation);
+      rate_[p] = -l.K / nh * div_q;
+      div_l_[p] = div_l;
+      soil_[p] = soil > 0.0;
       const bool surface = phi < kFreeSurfaceFraction;
       free_surface_[p] = surface ? 1 : 0;
       Sym tau = Sym::Zero();
-      if (surface) pp = 0.0;
-      else if (mu > 0.0) {
+      if (!surface && mu > 0.0) {
         const MatD<Dim> D = 0.5 * (L + L.transpose());
         const MatD<Dim> dev = D - (D.trace() / 3.0) * MatD<Dim>::Identity();  // 3D trace (plane strain: D_zz = 0)
         Mat3 t = Mat3::Zero();
@@ -583,17 +588,31 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         if constexpr (Dim == 2) t(2, 2) = 2.0 * mu * (-D.trace() / 3.0);
         tau = to_voigt(t);
       }
-      ws.p[p] = pp;
       ws.sigma[p] = tau;
+    }
+    // The pressure rate through the node-based multi-field variational step (seed 000 eqs. 33-34,
+    // as explicit-single-point: a_I = H_I^-1 sum N Q rate V, rate(x) = sum N Q^T a_I), which
+    // removes the point-to-point checkerboard of a pressure updated point by point.
+    if (mfvp_order_ == 0) mfvp0_.fit(grid_, box_, wschedule_, sdw_, ws.x, [&](int p) { return ws.V[p]; }, [&](int p) { return rate_[p]; });
+    if (mfvp_order_ == 1) mfvp1_.fit(grid_, box_, wschedule_, sdw_, ws.x, [&](int p) { return ws.V[p]; }, [&](int p) { return rate_[p]; });
+    long bad = transfer::no_particle;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      const Liquid& l = liquid_[ws.material[p]];
+      const double rate = mfvp_order_ == 0   ? mfvp0_.at_point(grid_, sdw_[p], ws.x[p])
+                          : mfvp_order_ == 1 ? mfvp1_.at_point(grid_, sdw_[p], ws.x[p])
+                                             : rate_[p];
+      double pp = std::max(ws.p[p] + dt * rate, -l.cavitation);
+      if (free_surface_[p]) pp = 0.0;
+      ws.p[p] = pp;
       // The mixture volume the point stands for follows the liquid (seepage into soil stretches
-      // it by 1 / n), and its porosity is the liquid's share of it.
-      // Free liquid (no solid in the support) is its own volume: points that spread apart under
-      // the cavitation bound or at the free surface do not become porous.
+      // it by 1 / n), and its porosity is the liquid's share of it. Free liquid (no solid in the
+      // support) is its own volume: points that spread apart under the cavitation bound or at the
+      // free surface do not become porous.
       const double Vw = liquid_volume(ws, static_cast<int>(p));
-      ws.V[p] = soil > 0.0 ? ws.V[p] * (1.0 + dt * div_l) : Vw;
+      ws.V[p] = soil_[p] ? ws.V[p] * (1.0 + dt * div_l_[p]) : Vw;
       ws.n[p] = std::min(1.0, Vw / ws.V[p]);
-      if (!(ws.V[p] > 0.0)) bad = std::min(bad, p);
-      if (!std::isfinite(pp)) bad = std::min(bad, p);
+      if (!(ws.V[p] > 0.0) || !std::isfinite(pp)) bad = std::min(bad, p);
     }
     return bad == transfer::no_particle ? -1 : bad;
   }
@@ -640,6 +659,11 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
   std::vector<NodeSums> node_;
   std::vector<double> support_;       // per node: int N_I dx (the free-surface test's full volume)
   std::vector<std::uint8_t> free_surface_;  // per liquid point, the last step's detection
+  std::vector<double> rate_, div_l_;         // per liquid point: dp/dt before the projection, div v_L
+  std::vector<std::uint8_t> soil_;           // per liquid point: solid in its support
+  int mfvp_order_ = 1;  // solver.stabilisation.pressure: -1 none, 0 mfvp-constant, 1 mfvp-linear
+  NodeProjection<Dim, S, 0, LeverageLimit::off> mfvp0_;
+  NodeProjection<Dim, S, 1, LeverageLimit::off> mfvp1_;
   std::vector<std::int64_t> partner_;  // per liquid-point id: the coincident solid point's id (tie)
   bool tie_ = false, fast_drainage_ = false;
   NodeBox<Dim> box_;
