@@ -11,18 +11,18 @@
 // One step (the seed's §3 steps in brackets):
 //   (0) both sets in scatter order every 10 steps (memory locality only)
 //   (1) shape data of both sets, the active box, schedules
-//   (2a) liquid P2G: M_L, M_L v_L, sum N m p (nodal p), and the nodal porosity n_I, the liquid's
-//        volume over the mixture volume the liquid points stand for (their own, kinematic V)
+//   (2a) liquid P2G: M_L, M_L v_L, sum N m p (nodal p), sum N V (occupied volume, free surface)
 //   (2b) solid P2G: M_s, M_s v_s, the effective-stress force and weight, the drag coefficient
-//        D_I = sum N V c(n, kappa, |v_L - v_S|) with each solid point's own porosity
+//        D_I = sum N V c(n, kappa, |v_L - v_S|) with each solid point's own porosity; the nodal
+//        porosity n_I = 1 - (solid volume) / (volume the support holds), 1 where no solid
 //   (2c) liquid forces: the liquid's weight and its pressure's force on both phases (eqs. 6-7 with
 //        the sigma_L . grad n part of eq. 9), integrated over the liquid points with n^ = sum N n_I
 //   (3) [1-2] per node: both momenta with the drag implicit (porous::solve_drag); BCs per phase
 //   (4) [3-4, 7] G2P of both sets (FLIP/PIC), positions with each set's own velocity; MUSL remap
 //   (5) [5] solid: L, F, V, n; liquefied points (n > n_max) get sigma' = 0, the others the
 //       material model; liquid: p += -(K_L / n^) [n^ div v_L + (1 - n^) div v_S +
-//       grad n^ . (v_L - v_S)] dt (eq. 8), the cavitation bound, the viscous deviatoric stress, the
-//       mixture volume V *= 1 + dt div v_L and the point's porosity (liquid volume) / V
+//       grad n^ . (v_L - v_S)] dt (eq. 8) through the multi-field variational step, the cavitation
+//       bound, the viscous deviatoric stress
 //   (6) [6] liquid points on the free surface (volume fraction below kFreeSurfaceFraction) get p = 0
 #include <omp.h>
 
@@ -58,6 +58,8 @@ constexpr double kViscosityPackingCap = 0.95;
 /// The nodal porosity 1 - theta_I is kept above this (points clustering in a support can give
 /// theta_I > 1).
 constexpr double kMinNodalPorosity = 0.01;
+/// A node whose support holds solid points of at least this share of its volume is inside soil.
+constexpr double kFullSupport = 0.98;
 /// Intrinsic viscosity [eta] of rigid spheres (Einstein), the exponent's factor of Krieger–Dougherty.
 constexpr double kIntrinsicViscosity = 2.5;
 
@@ -307,7 +309,8 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
  private:
   /// Per-node sums besides the two phases' momenta and forces.
   struct NodeSums {
-    double Vw = 0.0;           // sum N m / rho_L(p) of the liquid points: the liquid's volume
+    double Vs = 0.0, V = 0.0;  // sum N (1 - n) V, sum N V of the solid points
+    double Vw = 0.0;           // sum N m / rho_L(p) of the liquid points: the liquid's own volume
     double drag = 0.0;         // D_I = sum N V c [kg/s per (m/s)]: the drag force is D_I (v_L - v_S)
     double mp = 0.0;           // sum N m p of the liquid points -> p_I = mp / M_L (output)
     double V_L = 0.0;          // sum N V of the liquid points (mixture volume): free-surface test
@@ -364,7 +367,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
       const double kappa = k * sk.mu / (sk.rho_L * porous::g_earth);  // m^2
       // A non-porous solid (n = 0) takes no liquid and no drag.
       const double c = n > 0.0 ? drag_.coefficient(n, kappa, sk.mu, sk.rho_L, (ps.v_f[p] - ps.v[p]).norm()) : 0.0;
-      const double d = c * V;
+      const double d = c * V, Vs = (1.0 - n) * V;
       const MatD<Dim> A = V * to_matrix(ps.sigma[p]).template topLeftCorner<Dim, Dim>();
       const Vec<Dim> mv = m * ps.v[p], mb = m * b;
       shape::for_each_node(grid_, sp, [&](std::size_t i, double N, const Vec<Dim>& dN) {
@@ -373,22 +376,16 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         a.mv += N * mv;
         a.f.noalias() += N * mb - A * dN;
         NodeSums& s = node_[i];
+        s.Vs += N * Vs;
+        s.V += N * V;
         s.drag += N * d;
       });
     });
   }
 
   /// (2a) Liquid points' P2G: M_L = sum N m, sum N m v, sum N m p (the nodal p_I = sum N m p / M_L
-  /// of the solid points' output), sum N V (V the mixture volume the point stands for: the
-  /// free-surface test) and the nodal porosity
-  ///   n_I = sum N V_w / sum N V,  V_w = m / rho_L(p) the liquid's own volume,
-  /// the liquid's share of the mixture where the liquid is. The liquid points carry V themselves
-  /// (it follows the liquid, (5)), so their quadrature weights are the volumes they occupy and
-  /// the porosity steps from the soil's to 1 across a soil–free-water interface within the cell
-  /// the interface cuts. (The solid points' porosity averaged to the nodes, with the liquid's
-  /// V = m / (n^ rho_L), gave the free water beside soil the soil's porosity and 1 / n of its
-  /// volume, and the pressure in the cells at a bed's top under free water 50 % off:
-  /// docs/formulations.md, "Explicit double-point".)
+  /// of the solid points' output) and sum N V (V = m / (n^ rho_L), the mixture volume the point
+  /// stood for in the last step: the nodal porosity's occupied volume and the free-surface test).
   void scatter_liquid_mass(const ParticleSet<Dim>& ws) {
     wschedule_.run([&](int p) __attribute__((always_inline)) {
       const double m = ws.m[p], mp = m * ws.p[p], V = ws.V[p], Vw = liquid_volume(ws, p);
@@ -404,13 +401,19 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
       });
     });
   }
-  /// The nodal porosity n_I = sum N V_w / sum N V at the nodes with solid, 1 at the others (free
-  /// liquid: its points that have spread apart under the cavitation bound, V > V_w, are not soil).
+  /// The nodal porosity at the nodes with solid, the liquid's share of the mixture volume its
+  /// points stand for, n_I = sum N V_w / sum N V (V_w = m / rho_L(p) a liquid point's own volume, V
+  /// its mixture volume, (5)); 1 at the nodes without solid. With the liquid points' own volumes
+  /// as quadrature weights the porosity steps from the soil's to 1 within the cell a
+  /// soil–free-water interface cuts, and the pressure forces of (2c) hold a bed under free water
+  /// hydrostatic (docs/formulations.md, "Explicit double-point": the solid points' porosity
+  /// averaged to the nodes, with V = m / (n^ rho_L), put the pressure in the interface cells
+  /// 50 % off).
   void nodal_porosity() {
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       NodeSums& s = node_[i];
-      const bool soil = solid_.acc[i].m > transfer::empty_node_mass;
-      s.n = soil && s.V_L > 0.0 ? std::clamp(s.Vw / s.V_L, kMinNodalPorosity, 1.0) : 1.0;
+      s.n = solid_.acc[i].m > transfer::empty_node_mass && s.V_L > 0.0 ? std::clamp(s.Vw / s.V_L, kMinNodalPorosity, 1.0)
+                                                                        : 1.0;
     });
   }
   /// The liquid's own volume at a liquid point, m / rho_L(p) with rho_L(p) = rho_L (1 + p / K_L)
@@ -549,15 +552,14 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
     const long n = static_cast<long>(ws.size());
     free_surface_.resize(ws.size());
     rate_.resize(ws.size());
-    div_l_.resize(ws.size());
-    soil_.resize(ws.size());
 #pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       const Liquid& l = liquid_[ws.material[p]];
       double nh = 0.0;
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) { nh += N * node_[i].n; });
       const double mu = effective_viscosity(l.mu, nh);
-      double div_s = 0.0, div_l = 0.0, phi = 0.0, soil = 0.0;
+      double div_s = 0.0, div_l = 0.0, phi = 0.0, soil = 0.0, n_soil = 0.0;
+      bool inside = true;  // every node of the support is full of solid
       Vec<Dim> w = Vec<Dim>::Zero(), grad_n = Vec<Dim>::Zero();
       MatD<Dim> L = MatD<Dim>::Zero();
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
@@ -569,14 +571,20 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         w += N * (vl - vs);
         grad_n += s.n * dN;
         phi += N * std::min(1.0, s.V_L / support_[i]);
-        if (solid_.acc[i].m > transfer::empty_node_mass) soil += N;
+        if (s.V > 0.0) soil += N, n_soil += N * (1.0 - s.Vs / s.V);
+        inside = inside && s.V >= kFullSupport * support_[i];
         if (mu > 0.0) L.noalias() += vl * dN.transpose();
       });
       // eq. 8: the transpose of (2c)'s pressure forces
       const double div_q = nh * div_l + (1.0 - nh) * div_s + grad_n.dot(w);
       rate_[p] = -l.K / nh * div_q;
-      div_l_[p] = div_l;
-      soil_[p] = soil > 0.0;
+      // The mixture volume the point stands for: inside soil, its liquid volume over the solid
+      // points' porosity there (n_I = sum N V n / sum N V); in free liquid, its own volume; within
+      // a cell of the soil's boundary it follows the liquid (V *= 1 + dt div v_L: seepage into
+      // soil stretches it by 1 / n), where the solid's average would smear the porosity step.
+      const double Vw = liquid_volume(ws, static_cast<int>(p));
+      ws.V[p] = inside ? Vw / n_soil : soil == 0.0 ? Vw : ws.V[p] * (1.0 + dt * div_l);
+      ws.n[p] = nh;
       const bool surface = phi < kFreeSurfaceFraction;
       free_surface_[p] = surface ? 1 : 0;
       Sym tau = Sym::Zero();
@@ -605,14 +613,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
       double pp = std::max(ws.p[p] + dt * rate, -l.cavitation);
       if (free_surface_[p]) pp = 0.0;
       ws.p[p] = pp;
-      // The mixture volume the point stands for follows the liquid (seepage into soil stretches
-      // it by 1 / n), and its porosity is the liquid's share of it. Free liquid (no solid in the
-      // support) is its own volume: points that spread apart under the cavitation bound or at the
-      // free surface do not become porous.
-      const double Vw = liquid_volume(ws, static_cast<int>(p));
-      ws.V[p] = soil_[p] ? ws.V[p] * (1.0 + dt * div_l_[p]) : Vw;
-      ws.n[p] = std::min(1.0, Vw / ws.V[p]);
-      if (!(ws.V[p] > 0.0) || !std::isfinite(pp)) bad = std::min(bad, p);
+      if (!std::isfinite(pp)) bad = std::min(bad, p);
     }
     return bad == transfer::no_particle ? -1 : bad;
   }
@@ -659,8 +660,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
   std::vector<NodeSums> node_;
   std::vector<double> support_;       // per node: int N_I dx (the free-surface test's full volume)
   std::vector<std::uint8_t> free_surface_;  // per liquid point, the last step's detection
-  std::vector<double> rate_, div_l_;         // per liquid point: dp/dt before the projection, div v_L
-  std::vector<std::uint8_t> soil_;           // per liquid point: solid in its support
+  std::vector<double> rate_;                 // per liquid point: dp/dt before the projection
   int mfvp_order_ = 1;  // solver.stabilisation.pressure: -1 none, 0 mfvp-constant, 1 mfvp-linear
   NodeProjection<Dim, S, 0, LeverageLimit::off> mfvp0_;
   NodeProjection<Dim, S, 1, LeverageLimit::off> mfvp1_;
