@@ -180,3 +180,12 @@ TEST(Resume, MismatchedCheckpointsAreRefused) {
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("checkpoint.bin"), std::string::npos) << r.err;
 }
+
+TEST(Resume, ExplicitDoublePointColumnCollapseBetweenFrames) {
+  // Both point sets reordered, liquefied points, free-surface liquid, the lagged Ergun drag
+  // (the liquid velocity each solid point keeps), checkpoints between frames.
+  json s = shortened(example("column-collapse-double-point/scene.json"), 0.12, 6);
+  s["output"]["checkpoint_interval"] = 0.007;
+  const Pair p = run_killed_and_resumed(s, "edp", 5);
+  expect_identical(p, "explicit-double-point");
+}

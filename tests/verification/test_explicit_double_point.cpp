@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "scene/pointcloud.hpp"
+#include "support/indicators.hpp"
 #include "support/run_helpers.hpp"
 
 namespace {
@@ -120,8 +121,11 @@ TEST(ExplicitDoublePoint, SoilUnderFreeWaterStaysHydrostatic) {
   // The error relative to the base pressure (p / rho_w g H), away from the interface and at it.
   std::printf("hydrostatics: max |p - rho g d| / (rho g H) %.4f (interface cells %.4f), max |v_w| %.2e m/s\n", worst,
               worst_interface, v_max);
+  const double checker = swmpm::testing::checkerboard_indicator(water, p, 1.6 * h);
+  std::printf("hydrostatics: checkerboard indicator of p %.4f\n", checker);
   EXPECT_LT(worst, 0.01);
   EXPECT_LT(worst_interface, 0.06);
+  EXPECT_LT(checker, 0.01);
   EXPECT_LT(v_max, 1e-3 * std::sqrt(9.81 * H));
   const auto soil = swmpm::testing::last_frame(run, "solid");
   const auto& s = soil.get("stress", "solid").values;

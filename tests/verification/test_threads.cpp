@@ -177,6 +177,23 @@ TEST(Threads, DoublePointEscapedWaterOneAndTwoThreadsGiveIdenticalResults) {
                           {"pore_pressure", "velocity"});
 }
 
+// explicit-double-point: the column collapse (3200 solid and 3200 liquid points, above the
+// parallel threshold), 0.15 s: both scatters through their schedules, the liquid's pressure-rate
+// projection, the per-material stress lists that leave liquefied points out.
+TEST(Threads, ExplicitDoublePointOneAndTwoThreadsGiveIdenticalResults) {
+  nlohmann::json s =
+      swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/column-collapse-double-point/scene.json");
+  s["time"]["end"] = 0.15;
+  s["output"]["interval"] = 0.05;
+  const std::string one = swmpm::testing::run_scene(s, "threads-edp-1", 1);
+  const std::string two = swmpm::testing::run_scene(s, "threads-edp-2", 2);
+  EXPECT_EQ(swmpm::testing::read_text(one + "/monitors.csv"), swmpm::testing::read_text(two + "/monitors.csv"));
+  expect_identical_frames(swmpm::testing::last_frame(one, "fluid"), swmpm::testing::last_frame(two, "fluid"),
+                          {"pore_pressure", "velocity", "porosity", "free_surface"});
+  expect_identical_frames(swmpm::testing::last_frame(one, "solid"), swmpm::testing::last_frame(two, "solid"),
+                          {"stress", "velocity", "porosity", "liquefied", "pore_pressure"});
+}
+
 // The semi-implicit formulations with quadratic B-splines: the pressure operators come from cell
 // moments (transfer/cell_moments.hpp: points add to their cell through the schedule, cells are
 // reduced in two colours of stripes), the node fits and the F-bar through the schedule. B4's slope
