@@ -9,6 +9,7 @@ from each run.json.
   constituents, free drained top, dt = 0.4 of the soil's P-wave limit (the pressure is implicit).
   Particles counted: soil points plus water points (double-point).
 --shape linear|gimp|bspline2|bspline3 (default gimp).
+--formulation explicit-double-point: the same box saturated as solid and liquid points (K_L = 21.5 MPa).
 --formulation explicit-single-point: the same box saturated (n = 0.3, k = 1e-3 m/s, K_f = 2.2 GPa),
   geostatic and hydrostatic initial state, impermeable sides and base, with the scene's default
   stabilisation (cell-average strain smoothing + node-based MFVP, linear basis); dt = 0.4 of the
@@ -54,8 +55,14 @@ def scene(dim, n, extent, steps, formulation="dry", fbar="none", shape="gimp", m
         # explicit: the undrained P-wave; semi-implicit: the soil's own (the pressure is implicit)
         explicit = formulation == "explicit-single-point"
         dt = 0.4 * h / ((M + Kf / n_por if explicit else M) / rho_sat) ** 0.5
+        if formulation == "explicit-double-point":
+            # the seed's K_L = 21.5 MPa; the step of the formulation's own bound (solid on its
+            # partial density plus the liquid's storage acting on both phases)
+            Kf = 2.15e7
+            c2 = M / ((1 - n_por) * rho_s) + Kf * ((1 - n_por) / (n_por * rho_s) + 1 / rho_w)
+            dt = 0.4 * h / c2 ** 0.5
         return {
-            "name": f"bench-{'esp' if explicit else 'si'}-{dim}d-{n}",
+            "name": f"bench-{'esp' if explicit else 'edp' if formulation == 'explicit-double-point' else 'si'}-{dim}d-{n}",
             "dimension": dim,
             "formulation": formulation,
             "gravity": g,
@@ -110,7 +117,7 @@ def main():
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--out", default="")
     ap.add_argument("--formulation", default="dry", choices=["dry", "explicit-single-point", "semi-implicit-single-point",
-                                                             "semi-implicit-double-point"])
+                                                             "semi-implicit-double-point", "explicit-double-point"])
     ap.add_argument("--fbar", default="none", help="comma list: none, standard, modified, modified:RATIO (dry)")
     ap.add_argument("--shape", default="gimp", choices=["linear", "gimp", "bspline2", "bspline3"])
     ap.add_argument("--material", default="linear-elastic")

@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "scene/pointcloud.hpp"
@@ -295,4 +296,85 @@ TEST(ExplicitDoublePoint, SuspensionSettlesAtTerminalVelocityAndSediments) {
               syy / bottom);
   EXPECT_GE(packed, bottom / 4);
   EXPECT_LT(syy / bottom, -500.0);
+}
+
+namespace {
+
+/// C2 (examples/column-collapse-double-point) at time t: the fronts (99th percentile of x) of the
+/// solid and the liquid points, the share of liquefied solid points, and the share of solid points
+/// with no liquid point in their own or a neighbouring cell (25 mm cells: the dry layer).
+struct CollapseState {
+  double solid_front = 0, liquid_front = 0, liquefied = 0, dry = 0;
+};
+CollapseState collapse_state(const std::string& run, double t) {
+  auto frame = [&](const std::string& group) {
+    swmpm::scene::PointCloud best;
+    double dt = 1e300;
+    for (const auto& e : swmpm::scene::read_pvd(run + "/output/results.pvd"))
+      if (e.group == group && std::abs(e.time - t) < dt) dt = std::abs(e.time - t), best = swmpm::scene::read_vtu(run + "/output/" + e.file);
+    return best;
+  };
+  auto p99 = [](std::vector<double> x) {
+    std::sort(x.begin(), x.end());
+    return x[std::min(x.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(x.size())))];
+  };
+  CollapseState c;
+  const auto s = frame("solid");
+  std::vector<double> xs;
+  for (std::size_t i = 0; i < s.size(); ++i) xs.push_back(s.points[i][0]);
+  c.solid_front = p99(xs);
+  const auto* liq = s.find("liquefied");
+  if (!liq) return c;
+  const auto w = frame("fluid");
+  std::vector<double> xw;
+  std::set<std::pair<int, int>> cells;
+  const double h = 0.025;
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    xw.push_back(w.points[i][0]);
+    cells.insert({static_cast<int>(w.points[i][0] / h), static_cast<int>(w.points[i][1] / h)});
+  }
+  c.liquid_front = p99(xw);
+  int dry = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    c.liquefied += liq->values[i] / static_cast<double>(s.size());
+    const int cx = static_cast<int>(s.points[i][0] / h), cy = static_cast<int>(s.points[i][1] / h);
+    bool wet = false;
+    for (int a = -1; a <= 1 && !wet; ++a)
+      for (int b = -1; b <= 1 && !wet; ++b) wet = cells.count({cx + a, cy + b}) > 0;
+    dry += !wet;
+  }
+  c.dry = static_cast<double>(dry) / static_cast<double>(s.size());
+  return c;
+}
+
+}  // namespace
+
+// C2, recorded (examples/column-collapse-double-point/README.md): both formulations run the 2 s
+// collapse; the drag study at d = 7 mm shows the linear drag letting the liquid run ahead as free
+// water and leave dry grains, the Ergun term holding it in the soil. The seed's other findings
+// (single-point farther, a dry layer at d = 2 mm) are not reproduced: the numbers are printed and
+// bounded where they were measured, not asserted as the seed's.
+TEST(ExplicitDoublePoint, SlowC2ColumnCollapseAndDragStudy) {
+  const std::string dir = SWMPM_SOURCE_DIR "/examples/column-collapse-double-point/";
+  const auto sp = collapse_state(run_scene(load_json(dir + "scene-single-point.json"), "edp-c2-sp"), 2.0);
+  const auto dp = collapse_state(run_scene(load_json(dir + "scene.json"), "edp-c2-dp"), 2.0);
+  std::printf("C2 at 2 s: single-point front %.3f m; double-point solid %.3f m, liquid %.3f m, liquefied %.1f %%, dry %.1f %%\n",
+              sp.solid_front, dp.solid_front, dp.liquid_front, 100 * dp.liquefied, 100 * dp.dry);
+  EXPECT_GT(sp.solid_front, 3.0);
+  EXPECT_GT(dp.solid_front, 3.0);
+  EXPECT_LT(std::abs(dp.liquid_front - dp.solid_front), 0.1);
+  EXPECT_GT(dp.liquefied, 0.0);
+  CollapseState v[3];
+  const char* names[3] = {"a", "b", "c"};
+  for (int k = 0; k < 3; ++k) {
+    v[k] = collapse_state(run_scene(load_json(dir + "scene-drag-" + names[k] + ".json"), std::string("edp-c2-drag-") + names[k]), 0.85);
+    std::printf("C2 drag study (%s) at 0.85 s: solid front %.3f m, liquid front %.3f m, dry %.1f %%\n", names[k],
+                v[k].solid_front, v[k].liquid_front, 100 * v[k].dry);
+  }
+  for (int k = 0; k < 2; ++k) {  // linear drag: the liquid runs ahead and leaves dry grains
+    EXPECT_GT(v[k].liquid_front, v[k].solid_front + 0.5) << names[k];
+    EXPECT_GT(v[k].dry, 0.05) << names[k];
+  }
+  EXPECT_LT(std::abs(v[2].liquid_front - v[2].solid_front), 0.1);  // Ergun holds the liquid in the soil
+  EXPECT_LT(v[2].dry, 0.02);
 }
