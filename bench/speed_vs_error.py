@@ -10,7 +10,8 @@ Error metrics:
   --reference CSV --monitor NAME.QUANTITY
                 the relative L2 error of `swmpm postprocess RUN compare` (any scene).
   --metric terzaghi
-                Terzaghi consolidation (examples/terzaghi, explicit-single-point; or B1,
+                Terzaghi consolidation (examples/terzaghi, explicit-single-point; C1,
+                examples/consolidation-double-point, explicit-double-point or its single-point twin; or B1,
                 examples/terzaghi-semi-implicit, either semi-implicit variant, against the series
                 with incompressible water and p0 = q): RMS over all
                 particles of p/p0 - the series at the end time (z = depth of the particle's initial
@@ -128,13 +129,14 @@ def column_error(scene, rd, h, ppc):
     return (-float(rows[-1][col]) - exact) / exact
 
 
-def last_frame(swmpm, rd):
+def last_frame(swmpm, rd, phase="solid"):
     """The run's last frame as (time, {column: [values]}), read through VTK by
-    `swmpm postprocess RUN frame` (columns x, y[, z], then every array: displacement_y, pore_pressure, ...)."""
+    `swmpm postprocess RUN frame` (columns x, y[, z], then every array: displacement_y, pore_pressure, ...);
+    phase "fluid": the water points of a double-point run."""
     # The run's own end time: with --time 1e300 every frame is equally far (1e300 - t == 1e300).
     with open(os.path.join(rd, "run.json")) as f:
         end = json.load(f)["end_time"]
-    out = subprocess.run([swmpm, "-q", "postprocess", rd, "frame", "--time", repr(end)], check=True,
+    out = subprocess.run([swmpm, "-q", "postprocess", rd, "frame", "--time", repr(end), "--phase", phase], check=True,
                          capture_output=True, text=True).stdout
     lines = out.splitlines()
     t = float(re.search(r"the frame at t = ([0-9.eE+-]+) s", "\n".join(l for l in lines if l.startswith("#"))).group(1))
@@ -157,8 +159,11 @@ def saturated_column(scene):
     # the undrained response to the load q is p = q at once (no initial pore pressure given).
     incompressible = scene["formulation"].startswith("semi-implicit")
     q = -scene["loads"][0]["value"][1]
+    k = solid.get("hydraulic_conductivity")
+    if k is None:  # seed 003's C1 gives the intrinsic permeability: k = kappa rho_w g / mu
+        k = solid["intrinsic_permeability"] * fluid["density"] * 9.81 / fluid.get("dynamic_viscosity", 1e-3)
     return dict(E=solid["youngs_modulus"], nu=solid["poisson_ratio"], n=solid["porosity"],
-                k=solid["hydraulic_conductivity"], rho_w=fluid["density"],
+                k=k, rho_w=fluid["density"],
                 K_f=math.inf if incompressible else fluid["bulk_modulus"],
                 p0=body["initial"].get("pore_pressure", q) if not incompressible else q, q=q,
                 H=geo["max"][1] - geo["min"][1], y_min=geo["min"][1], end=scene["time"]["end"])
@@ -177,7 +182,8 @@ def terzaghi_error(swmpm, scene, rd):
     c = saturated_column(scene)
     E_oed = c["E"] * (1 - c["nu"]) / ((1 + c["nu"]) * (1 - 2 * c["nu"]))
     c_v = c["k"] / (c["rho_w"] * 9.81 * (1.0 / E_oed + c["n"] / c["K_f"]))
-    t, f = last_frame(swmpm, rd)
+    # double-point: the liquid points carry the pressure (examples/consolidation-double-point, C1)
+    t, f = last_frame(swmpm, rd, "fluid" if scene["formulation"] == "explicit-double-point" else "solid")
     Tv = c_v * t / c["H"] ** 2
     err2 = 0.0
     for y, uy, p in zip(f["y"], f["displacement_y"], f["pore_pressure"]):

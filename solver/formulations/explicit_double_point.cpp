@@ -58,6 +58,8 @@ constexpr double kViscosityPackingCap = 0.95;
 /// The nodal porosity 1 - theta_I is kept above this (points clustering in a support can give
 /// theta_I > 1).
 constexpr double kMinNodalPorosity = 0.01;
+/// A node whose support holds solid points of at least this share of its volume is inside soil.
+constexpr double kFullSupport = 0.98;
 /// Intrinsic viscosity [eta] of rigid spheres (Einstein), the exponent's factor of Krieger–Dougherty.
 constexpr double kIntrinsicViscosity = 2.5;
 
@@ -556,7 +558,8 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
       double nh = 0.0;
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) { nh += N * node_[i].n; });
       const double mu = effective_viscosity(l.mu, nh);
-      double div_s = 0.0, div_l = 0.0, phi = 0.0, soil = 0.0, n_soil = 0.0, phi_s = 0.0;
+      double div_s = 0.0, div_l = 0.0, phi = 0.0, soil = 0.0, n_soil = 0.0;
+      bool inside = true;  // every node of the support is full of solid
       Vec<Dim> w = Vec<Dim>::Zero(), grad_n = Vec<Dim>::Zero();
       MatD<Dim> L = MatD<Dim>::Zero();
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>& dN) {
@@ -569,18 +572,21 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         grad_n += s.n * dN;
         phi += N * std::min(1.0, s.V_L / support_[i]);
         if (s.V > 0.0) soil += N, n_soil += N * (1.0 - s.Vs / s.V);
-        phi_s += N * std::min(1.0, s.V / support_[i]);
+        inside = inside && s.V >= kFullSupport * support_[i];
         if (mu > 0.0) L.noalias() += vl * dN.transpose();
       });
       // eq. 8: the transpose of (2c)'s pressure forces
       const double div_q = nh * div_l + (1.0 - nh) * div_s + grad_n.dot(w);
       rate_[p] = -l.K / nh * div_q;
-      // The mixture volume the point stands for: inside the soil (the solid points' volume
-      // fraction at the point, phi_s = sum N min(1, sum N V_s / int N_I), at least 1/2) its liquid
-      // volume over the solid points' porosity there (n_I = sum N V n / sum N V); outside, its own
-      // volume. The porosity steps at the soil's surface, where it steps in the ground.
+      // The mixture volume the point stands for: where its support is full of soil, its liquid
+      // volume over the solid points' porosity there (n_I = sum N V n / sum N V); in free liquid
+      // (no solid in the support), its own volume; between, within a cell of the soil's surface,
+      // it follows the liquid, V *= 1 + dt div v_L (seepage into soil stretches it by 1 / n), so
+      // that the porosity steps where the liquid points' volumes step, not smeared over the
+      // support. (Switching at the soil's half volume fraction instead: seepage 9 % low at
+      // h = 25 mm and 19 % at 12.5 mm; this: 13 % and 4 %.)
       const double Vw = liquid_volume(ws, static_cast<int>(p));
-      ws.V[p] = phi_s >= 0.5 && soil > 0.0 ? Vw * soil / n_soil : Vw;
+      ws.V[p] = inside ? Vw * soil / n_soil : soil == 0.0 ? Vw : ws.V[p] * (1.0 + dt * div_l);
       ws.n[p] = nh;
       const bool surface = phi < kFreeSurfaceFraction;
       free_surface_[p] = surface ? 1 : 0;
