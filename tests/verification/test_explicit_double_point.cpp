@@ -150,9 +150,9 @@ TEST(ExplicitDoublePoint, SoilUnderFreeWaterStaysHydrostatic) {
 TEST(ExplicitDoublePoint, E3DamBreakFrontFollowsMartinAndMoyce) {
   const json scene = load_json(SWMPM_SOURCE_DIR "/examples/dam-break-double-point/scene.json");
   const std::string run = run_scene(scene, "edp-dam-break");
-  // Martin & Moyce's front Z = x / a against T (refdata/martin_moyce_1952_front.csv).
+  // Martin & Moyce's front Z = x / a against T (shared/refdata, copied into the example folder with its source).
   std::vector<std::pair<double, double>> ref;
-  std::ifstream in(SWMPM_SOURCE_DIR "/../shared/refdata/martin_moyce_1952_front.csv");
+  std::ifstream in(SWMPM_SOURCE_DIR "/examples/dam-break-double-point/martin-moyce-1952-front.csv");
   std::string line;
   while (std::getline(in, line))
     if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) {
