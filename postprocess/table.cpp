@@ -170,7 +170,7 @@ std::string unit_of(const std::string& q, int dimension) {
   auto starts = [&q](const char* prefix) { return q.rfind(prefix, 0) == 0; };
   if (q == "time") return "s";
   if (starts("fluid_velocity") || starts("velocity")) return "m/s";
-  if (starts("displacement") || starts("half_size")) return "m";
+  if (starts("displacement") || starts("half_size") || q == "water_level") return "m";
   if (starts("stress") || q == "mean_effective_stress" || q == "deviatoric_stress" || q == "pore_pressure")
     return "Pa";
   if (q == "mass" || q == "fluid_mass") return "kg" + per_m;

@@ -524,8 +524,11 @@ const Table& monitor_table() {
            .meaning = "Unique; CSV columns are `<name>.<quantity>`.", .type_text = "string",
            .expect = "a name of letters, digits, '_', '-'", .allowed = "`[A-Za-z0-9_-]+`",
            .check = check_monitor_name},
-          {.name = "at", .type = Type::vector, .unit = "m",
-           .meaning = "Follow the particle of `phase` nearest to this point at t = 0."},
+          {.name = "at", .type = Type::custom, .unit = "m",
+           .meaning = "Follow the particle of `phase` nearest to this point at t = 0; in a `water_level` gauge, "
+                      "the gauge's vertical line: x (2D) or x, z (3D).",
+           .type_text = "vector", .allowed = "`dimension` numbers; `dimension` − 1 in a `water_level` gauge",
+           .check = check_monitor_at},
           {.name = "particle", .type = Type::integer, .range = at_least(0),
            .meaning = "Or follow this particle id (not with `at`)."},
           {.name = "phase", .type = Type::choice, .def = "solid", .values = {"solid", "fluid"},

@@ -47,6 +47,14 @@ Scene SceneParser::parse() {
   for (const auto& at : water_monitors_)
     if (s_.formulation != Formulation::automatic && !row_of(s_.formulation).water.fluid_particles)
       c_.error(at, "got \"water\", but only the double-point formulations have water points; expected \"soil\"");
+  if (s_.formulation != Formulation::automatic && s_.has_fluid() && !row_of(s_.formulation).water.fluid_particles) {
+    std::vector<std::string> readers;  // formulations with liquid points
+    for (const FormulationRow& r : formulation_rows())
+      if (r.implemented && r.water.fluid_particles) readers.push_back(r.name);
+    for (const auto& at : gauges_)
+      c_.error(at, "got \"water_level\", but formulation " + in_quotes(to_string(s_.formulation)) +
+                       " has no liquid points; expected a formulation that reads it: " + join(readers));
+  }
   // Formulation-specific switches against the formulation's row (scene/formulations.hpp): refused
   // where the formulation does not read them or lacks the value; unset ones take the row's default.
   if (s_.formulation != Formulation::automatic) {
@@ -406,42 +414,14 @@ void SceneParser::parse_output(const json& j, const std::string& path) {
     const Obj m = check_object(c_, arr[i], item(o.at("monitors"), i), {&monitor_table()});
     Monitor mon;
     mon.name = m.str("name");
-    if (m.ok("at")) mon.at = m.vec("at");
-    if (m.ok("particle")) mon.particle = static_cast<long>(m.get("particle").get<double>());
-    mon.phase = m.str("phase", "solid");
-    mon.points = m.str("points", "soil");
-    if (mon.points == "water") water_monitors_.push_back(m.at("points"));  // checked with the formulation
-    if (m.has("at") && m.has("particle")) {
-      c_.error(m.at("particle"), "got both \"at\" and \"particle\", expected one of them "
-                                 "(or neither, for a global monitor)");
-    }
-    const bool global = !m.has("at") && !m.has("particle");
-    if (mon.phase == "fluid" && !s_.has_fluid()) {
-      c_.error(m.at("phase"), "got \"fluid\", but the scene has no fluid phase (no body has a "
-                              "\"fluid\"); expected \"solid\"");
-    }
-    if (mon.at && grid_ok_) {
-      for (int d = 0; d < dim(); ++d) {
-        const auto k = static_cast<std::size_t>(d);
-        if ((*mon.at)[k] < grid_min_[k] || (*mon.at)[k] > grid_max_[k]) {
-          c_.error(m.at("at"), "got " + fmt_vec(*mon.at, dim()) + ", expected a point inside the grid " +
-                                   fmt_vec(grid_min_, dim()) + ".." + fmt_vec(grid_max_, dim()) + " [m]");
-          break;
-        }
-      }
-    }
-    if (m.ok("quantities")) {
-      const json& qs = m.get("quantities");
-      for (std::size_t k = 0; k < qs.size(); ++k) {
-        const std::string q = qs[k].get<std::string>();
-        const std::string qp = item(m.at("quantities"), k);
-        check_quantity(q, global, qp);
-        if (contains(mon.quantities, q)) {
-          c_.error(qp, "got " + in_quotes(q) + " twice, expected each quantity at most once");
-        }
-        mon.quantities.push_back(q);
-      }
-    }
+    // A monitor asking for water_level is a gauge: it reads the liquid on a vertical line, not one
+    // particle (found in the raw quantities, so that a misspelt neighbour does not hide it).
+    const json& raw = arr[i];
+    const bool gauge = raw.is_object() && raw.contains("quantities") && raw["quantities"].is_array() &&
+                       std::find(raw["quantities"].begin(), raw["quantities"].end(), json("water_level")) !=
+                           raw["quantities"].end();
+    if (gauge) parse_gauge(m, mon);
+    else parse_point_or_global(m, mon);
     if (!mon.name.empty()) {
       if (first.count(mon.name) != 0) {
         c_.error(m.at("name"), "got " + in_quotes(mon.name) + " again (also " + first[mon.name] +
@@ -451,6 +431,102 @@ void SceneParser::parse_output(const json& j, const std::string& path) {
       }
     }
     s_.output.monitors.push_back(mon);
+  }
+}
+
+/// A point monitor (`at` or `particle`: one particle followed) or a global one (neither).
+void SceneParser::parse_point_or_global(const Obj& m, Monitor& mon) {
+  // The number of components once the dimension is known (c_.dim; 0: the scene's is invalid).
+  if (m.ok("at") && c_.dim != 0 && m.get("at").size() != static_cast<std::size_t>(dim())) {
+    c_.error(m.at("at"), "got " + shown(m.get("at")) + " (" + std::to_string(m.get("at").size()) +
+                             " components), expected " + vector_phrase(dim()) + " [m] (" + std::to_string(dim() - 1) +
+                             " only in a water_level gauge)");
+  } else if (m.ok("at")) {
+    mon.at = m.vec("at");
+  }
+  if (m.ok("particle")) mon.particle = static_cast<long>(m.get("particle").get<double>());
+  mon.phase = m.str("phase", "solid");
+  mon.points = m.str("points", "soil");
+  if (mon.points == "water") water_monitors_.push_back(m.at("points"));  // checked with the formulation
+  if (m.has("at") && m.has("particle")) {
+    c_.error(m.at("particle"), "got both \"at\" and \"particle\", expected one of them "
+                               "(or neither, for a global monitor)");
+  }
+  const bool global = !m.has("at") && !m.has("particle");
+  if (mon.phase == "fluid" && !s_.has_fluid()) {
+    c_.error(m.at("phase"), "got \"fluid\", but the scene has no fluid phase (no body has a "
+                            "\"fluid\"); expected \"solid\"");
+  }
+  if (mon.at && grid_ok_) {
+    for (int d = 0; d < dim(); ++d) {
+      const auto k = static_cast<std::size_t>(d);
+      if ((*mon.at)[k] < grid_min_[k] || (*mon.at)[k] > grid_max_[k]) {
+        c_.error(m.at("at"), "got " + fmt_vec(*mon.at, dim()) + ", expected a point inside the grid " +
+                                 fmt_vec(grid_min_, dim()) + ".." + fmt_vec(grid_max_, dim()) + " [m]");
+        break;
+      }
+    }
+  }
+  if (m.ok("quantities")) {
+    const json& qs = m.get("quantities");
+    for (std::size_t k = 0; k < qs.size(); ++k) {
+      const std::string q = qs[k].get<std::string>();
+      const std::string qp = item(m.at("quantities"), k);
+      check_quantity(q, global, qp);
+      if (contains(mon.quantities, q)) {
+        c_.error(qp, "got " + in_quotes(q) + " twice, expected each quantity at most once");
+      }
+      mon.quantities.push_back(q);
+    }
+  }
+}
+
+/// A water_level gauge (monitors.hpp): `at` is its vertical line, x in 2D, (x, z) in 3D, inside
+/// the grid; it records water_level alone and follows no particle. Which formulations read it is
+/// checked once the formulation is known (parse()).
+void SceneParser::parse_gauge(const Obj& m, Monitor& mon) {
+  for (const char* key : {"particle", "points", "phase"})
+    if (m.has(key))
+      c_.error(m.at(key), "got " + in_quotes(key) + " in a water_level gauge, expected none of \"particle\", "
+                              "\"points\", \"phase\" (a gauge reads the liquid points near its vertical line, "
+                              "not one particle)");
+  const std::string line = dim() == 2 ? "1 number, x" : "2 numbers, x and z";
+  if (!m.has("at")) {
+    c_.error(m.at("at"), "missing, expected the vertical line of the water_level gauge: " + line + " [m]");
+  } else if (m.ok("at") && c_.dim != 0) {  // 0: the scene's dimension is invalid, reported there
+    const json& a = m.get("at");
+    if (a.size() + 1 != static_cast<std::size_t>(dim())) {
+      c_.error(m.at("at"), "got " + shown(a) + " (" + std::to_string(a.size()) + " components), expected " + line +
+                               " of the water_level gauge's vertical line (y is vertical) [m]");
+    } else {
+      // (x, ·, z): the file's [x] or [x, z]; y unused.
+      const Vec3 g{a[0].get<double>(), 0.0, dim() == 3 ? a[1].get<double>() : 0.0};
+      mon.gauge = g;
+      const auto within = [&](std::size_t k) { return g[k] >= grid_min_[k] && g[k] <= grid_max_[k]; };
+      if (grid_ok_ && !(within(0) && (dim() == 2 || within(2)))) {
+        c_.error(m.at("at"), "got " + shown(a) + ", expected a vertical line inside the grid: x in [" +
+                                 fmt_g(grid_min_[0]) + ", " + fmt_g(grid_max_[0]) + "]" +
+                                 (dim() == 3 ? ", z in [" + fmt_g(grid_min_[2]) + ", " + fmt_g(grid_max_[2]) + "]"
+                                             : std::string()) +
+                                 " [m]");
+      }
+    }
+  }
+  if (!m.ok("quantities")) return;
+  const json& qs = m.get("quantities");
+  for (std::size_t k = 0; k < qs.size(); ++k) {
+    const std::string q = qs[k].get<std::string>();
+    const std::string qp = item(m.at("quantities"), k);
+    if (q != "water_level") {
+      c_.error(qp, "got " + in_quotes(q) + " in a water_level gauge, expected only \"water_level\" (a gauge "
+                   "follows no particle; record other quantities in another monitor)");
+    } else if (contains(mon.quantities, q)) {
+      c_.error(qp, "got " + in_quotes(q) + " twice, expected each quantity at most once");
+    } else {
+      check_quantity(q, false, qp);
+      gauges_.push_back(qp);
+    }
+    mon.quantities.push_back(q);
   }
 }
 

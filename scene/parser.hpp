@@ -45,6 +45,7 @@ class SceneParser {
   std::vector<MaterialInfo> material_info_;
   std::vector<std::string> body_paths_;
   std::vector<std::string> water_monitors_;  // JSON paths of monitors with points "water"
+  std::vector<std::string> gauges_;          // JSON paths of water_level quantities (gauges)
   std::vector<std::optional<Bounds>> body_bounds_;  // per body, when known before preprocess
   struct PendingFooting {
     std::size_t body;
@@ -93,6 +94,8 @@ class SceneParser {
   void parse_loads(const json& arr, const std::string& path);
   void parse_time(const json& j, const std::string& path);
   void parse_output(const json& j, const std::string& path);
+  void parse_point_or_global(const Obj& m, Monitor& mon);
+  void parse_gauge(const Obj& m, Monitor& mon);
   void check_quantity(const std::string& q, bool global, const std::string& path);
   void parse_solver(const json& j, const std::string& path);
   void parse_initialisation(const json& j, const std::string& path, const Obj& top);

@@ -141,6 +141,10 @@ struct Monitor {
   std::string name;
   std::optional<Vec3> at;        // nearest particle of `phase` at t = 0, followed through the run
   std::optional<long> particle;  // or a particle id
+  // A water_level gauge instead (`at` and `particle` empty): its vertical line (x, ·, z) [m], y
+  // unused (the file's "at": [x] in 2D, [x, z] in 3D; y is the vertical axis). monitors.hpp
+  // defines the level it reads.
+  std::optional<Vec3> gauge;
   std::string phase = "solid";   // solid | fluid
   std::string points = "soil";   // soil | water: which set a point monitor follows (water: double-point)
   std::vector<std::string> quantities;

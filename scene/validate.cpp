@@ -240,6 +240,15 @@ bool check_dt(Ctx& c, const json& v, const std::string& path, const Key& k) {
   return false;
 }
 
+bool check_monitor_at(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (v.is_array() && !v.empty() && v.size() <= 3 &&
+      std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number(); }))
+    return true;  // the number of components: parse_output
+  c.error(path, "got " + shown(v) + ", expected " + vector_phrase(c.dim) + ", or one fewer in a water_level gauge [" +
+                    k.unit + "]");
+  return false;
+}
+
 bool check_pore_pressure(Ctx& c, const json& v, const std::string& path, const Key& k) {
   if (v.is_number() || v == "hydrostatic") return true;
   report(c, v, path, k);

@@ -136,6 +136,9 @@ std::string vector_phrase(int dim);
 bool is_integral(const json& v);
 bool check_dir_name(Ctx& c, const json& v, const std::string& path, const Key& k);
 bool check_monitor_name(Ctx& c, const json& v, const std::string& path, const Key& k);
+/// A monitor's `at`: 1 to 3 numbers here; parse_output, which knows the monitor's quantities, checks
+/// for `dimension` of them, or `dimension` − 1 in a water_level gauge (its vertical line).
+bool check_monitor_at(Ctx& c, const json& v, const std::string& path, const Key& k);
 bool check_dt(Ctx& c, const json& v, const std::string& path, const Key& k);
 bool check_pore_pressure(Ctx& c, const json& v, const std::string& path, const Key& k);
 bool check_stress(Ctx& c, const json& v, const std::string& path, const Key& k);

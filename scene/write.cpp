@@ -165,7 +165,13 @@ nlohmann::json to_json(const Scene& s) {
 
   json monitors = json::array();
   for (const Monitor& m : s.output.monitors) {
-    json mj = {{"name", m.name}, {"phase", m.phase}, {"quantities", m.quantities}};
+    json mj = {{"name", m.name}, {"quantities", m.quantities}};
+    if (m.gauge) {  // a water_level gauge: its vertical line, [x] or [x, z]; no phase
+      mj["at"] = dim == 2 ? json::array({(*m.gauge)[0]}) : json::array({(*m.gauge)[0], (*m.gauge)[2]});
+      monitors.push_back(mj);
+      continue;
+    }
+    mj["phase"] = m.phase;
     if (m.at) mj["at"] = vec_json(*m.at, dim);
     if (m.particle) mj["particle"] = *m.particle;
     if (m.points != "soil") mj["points"] = m.points;

@@ -1,9 +1,13 @@
 #include "solver/output/monitors.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+
+#include "scene/formulations.hpp"
 
 namespace swmpm {
 
@@ -12,9 +16,27 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
                         const std::string& header_comment, std::optional<std::size_t> resume_bytes) {
   std::ostringstream header;
   header << "time";
+  reach_ = 0.5 * s.grid.cell_size * (1.0 + 1e-9);  // h/2, with round-off
   for (std::size_t k = 0; k < s.output.monitors.size(); ++k) {
     const auto& mon = s.output.monitors[k];
     const std::string where = "/output/monitors/" + std::to_string(k);
+    if (mon.gauge) {  // a water_level gauge: no particle; the parser allows water_level alone here
+      if (!scene::row_of(s.formulation).water.fluid_particles)
+        throw std::runtime_error(where + "/quantities: \"water_level\" needs liquid points (a double-point "
+                                 "formulation)");
+      monitor_particle_.push_back(-1);
+      monitor_water_.push_back(0);
+      monitor_gauge_.push_back(static_cast<int>(gauges_.size()));
+      names_.push_back(mon.name);
+      for (const auto& qn : mon.quantities) {
+        if (qn != "water_level")
+          throw std::runtime_error(where + "/quantities: \"" + qn + "\" is not available in a water_level gauge");
+        columns_.push_back({-1, Q::level, static_cast<int>(gauges_.size())});
+        header << "," << mon.name << "." << qn;
+      }
+      gauges_.push_back({(*mon.gauge)[0], (*mon.gauge)[2]});
+      continue;
+    }
     // A water point of the double-point set, or a soil point. Single-point two-phase sets carry
     // both phases on one point: phase "fluid" reads its fluid fields (velocity, pore pressure).
     const bool water = mon.points == "water";
@@ -46,6 +68,7 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
     const std::int64_t pid = particle < 0 ? -1 : ps.id[particle];
     monitor_particle_.push_back(pid);
     monitor_water_.push_back(water && pid >= 0);
+    monitor_gauge_.push_back(-1);
     names_.push_back(mon.name);
     for (const auto& qn : mon.quantities) {
       Column c{pid, Q::disp, 0};
@@ -99,6 +122,10 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
   double ke = -1.0, se = -1.0;
   for (const Column& c : columns_) {
     double val = 0.0;
+    if (c.q == Q::level) {
+      row_ << "," << water_level(st.fluid, gauges_[static_cast<std::size_t>(c.comp)]);
+      continue;
+    }
     if (c.water) {  // a water point: its own position, velocity, pore pressure and porosity
       const auto& ws = st.fluid;
       const int p = water_index(ws, c.particle);
@@ -129,11 +156,25 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
         val = ke + se;
         break;
       case Q::work: val = external_work; break;
+      case Q::level: break;  // above
     }
     row_ << "," << val;
   }
   row_ << "\n";
   out_.write(row_.str());  // checked: a failed write throws files::WriteError
+}
+
+template <int Dim>
+double Monitors<Dim>::water_level(const ParticleSet<Dim>& ws, const Gauge& g) const {
+  double top = -std::numeric_limits<double>::infinity();  // m
+  for (std::size_t p = 0; p < ws.size(); ++p) {
+    if (std::abs(ws.x[p][0] - g.x) > reach_) continue;
+    if constexpr (Dim == 3) {
+      if (std::abs(ws.x[p][2] - g.z) > reach_) continue;
+    }
+    top = std::max(top, ws.x[p][1] + ws.l[p][1]);  // the top of the point's domain
+  }
+  return std::isfinite(top) ? top : std::numeric_limits<double>::quiet_NaN();
 }
 
 template <int Dim>
@@ -166,7 +207,12 @@ std::vector<std::string> Monitors<Dim>::describe(const State<Dim>& st) const {
       p = st.index_of_id[monitor_particle_[k]];
     std::ostringstream os;
     os << "monitor " << names_[k] << ": ";
-    if (p < 0) os << "whole system";
+    if (const int gi = monitor_gauge_[k]; gi >= 0) {
+      const Gauge& g = gauges_[static_cast<std::size_t>(gi)];
+      os << "water level on the vertical line x = " << g.x;
+      if (Dim == 3) os << ", z = " << g.z;
+      os << " (the liquid points within " << reach_ << " m of it)";
+    } else if (p < 0) os << "whole system";
     else {
       os << "follows " << (water ? "water point " : "solid particle ") << ps.id[p] << " starting at (";
       for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << ps.x0[p][a];

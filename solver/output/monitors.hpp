@@ -2,6 +2,16 @@
 // A point monitor follows one particle: the particle nearest to `at` at t = 0 (or the given id), a
 // soil point, or with `points: "water"` a water point of the double-point set (State::fluid).
 // A global monitor (no `at`, no `particle`) records energies of the whole system.
+// A water_level gauge (scene::Monitor::gauge, the file's "at": [x] in 2D, [x, z] in 3D) records the
+// height of the liquid's free surface on the vertical line through (x, ·, z), y being vertical:
+//
+//     water_level = max { y_p + l_p,y : p a liquid point, |x_p − x| ≤ h/2 (and |z_p − z| ≤ h/2 in 3D) }
+//
+// over the liquid points of the double-point formulations (State::fluid: free water and pore water
+// alike), y_p the point's position, l_p,y the half-height of its domain (ParticleSet::l, the initial
+// GIMP half-size) and h the grid's cell size; h/2 is widened by 1e-9 of itself for round-off, so
+// that a line through nodes sees the points on both sides at h/2. NaN when no liquid point is that
+// close. Read afresh at every row: O(number of liquid points) per gauge, no allocation.
 #pragma once
 
 #include <cstdint>
@@ -42,23 +52,36 @@ class Monitors {
       if (c.water && c.q == Q::porosity) return true;
     return false;
   }
-  /// One line per point monitor: which particle it follows and where it started.
+  /// One line per monitor: the particle it follows and where it started, a gauge's line, or "whole system".
   std::vector<std::string> describe(const State<Dim>& st) const;
 
  private:
-  enum class Q { disp, vel, vel_fluid, stress, p_mean, q_dev, eps_p, pore, porosity, kinetic, strain, total, work };
+  // Point quantities, then those of no particle (kinetic onwards: energies, work, a gauge's level).
+  enum class Q {
+    disp, vel, vel_fluid, stress, p_mean, q_dev, eps_p, pore, porosity,  // of one particle
+    kinetic, strain, total, work, level                                   // of none
+  };
   struct Column {
     std::int64_t particle;  // particle id, -1 for global
     Q q;
-    int comp;
+    int comp;            // component; for Q::level the index into gauges_
     bool water = false;  // a water point's id (State::fluid)
   };
+  /// A water_level gauge's vertical line [m].
+  struct Gauge {
+    double x, z;  // z unused in 2D
+  };
+  /// The level on a gauge's line (the definition above) [m], NaN when no liquid point is near it.
+  double water_level(const ParticleSet<Dim>& ws, const Gauge& g) const;
   /// The current index of water point `id` (the formulation may reorder the set, or remove
   /// escaped water), or -1: the index found last time when it still holds the id, else a search.
   int water_index(const ParticleSet<Dim>& ws, std::int64_t id);
   std::vector<std::string> names_;
   std::vector<std::int64_t> monitor_particle_;  // ids, -1 for global
   std::vector<char> monitor_water_;             // per monitor: follows a water point
+  std::vector<int> monitor_gauge_;              // per monitor: index into gauges_, -1 for none
+  std::vector<Gauge> gauges_;
+  double reach_ = 0.0;  // m, a gauge reads the liquid points within this horizontal distance: h/2
   std::vector<std::pair<std::int64_t, int>> water_found_;  // water point id -> index last found
   std::vector<Column> columns_;
   files::CheckedFile out_;

@@ -617,8 +617,92 @@ TEST(SceneErrors, MonitorRules) {
   p["output"]["monitors"][0]["at"] = {0.5, 0.5};
   EXPECT_TRUE(reports(p, "/output/monitors/0/at", "expected a point inside the grid"));
   json q = scene_2d();  // stress_zz exists in plane strain
-  q["output"]["monitors"][0]["quantities"] = {"stress_zz", "water_level"};
+  q["output"]["monitors"][0]["quantities"] = {"stress_zz", "pore_pressure"};
   EXPECT_TRUE(problems(q).empty()) << dump_lines(problems(q));
+  json r = scene_2d();  // `dimension` - 1 numbers only in a water_level gauge
+  r["output"]["monitors"][0]["at"] = {0.05};
+  EXPECT_TRUE(reports(r, "/output/monitors/0/at", "(1 components), expected a vector of 2 numbers"));
+}
+
+/// A pond of free water (explicit-double-point) with a water_level gauge, in 2D or 3D.
+json pond(int dim) {
+  json j = json::parse(R"json({
+    "name": "pond", "dimension": 2, "formulation": "explicit-double-point", "gravity": [0, -9.81],
+    "grid": { "cell_size": 0.05, "min": [0, 0], "max": [0.2, 0.5], "shape_function": "gimp" },
+    "materials": [ { "name": "water", "model": "fluid", "density": 1000, "bulk_modulus": 2e6 } ],
+    "bodies": [ { "name": "pond", "geometry": { "type": "box", "min": [0, 0], "max": [0.2, 0.3] },
+                  "fluid": "water", "initial": { "pore_pressure": "hydrostatic" } } ],
+    "boundaries": [ { "on": "x_min", "fluid": "impermeable" }, { "on": "x_max", "fluid": "impermeable" },
+                    { "on": "y_min", "fluid": "impermeable" } ],
+    "time": { "end": 0.2 },
+    "output": { "monitors": [ { "name": "gauge", "at": [0.1], "quantities": ["water_level"] } ] }
+  })json");
+  if (dim == 3) {
+    j["dimension"] = 3;
+    j["gravity"] = {0, -9.81, 0};
+    j["grid"]["min"] = {0, 0, 0};
+    j["grid"]["max"] = {0.2, 0.5, 0.1};
+    j["bodies"][0]["geometry"]["min"] = {0, 0, 0};
+    j["bodies"][0]["geometry"]["max"] = {0.2, 0.3, 0.1};
+    j["output"]["monitors"][0]["at"] = {0.1, 0.05};
+  }
+  return j;
+}
+
+TEST(Scene, WaterLevelGaugeKeepsItsVerticalLineThroughTheRoundTrip) {
+  for (int dim : {2, 3}) {
+    const Scene s = parse_scene(pond(dim), "t.json");
+    const Monitor& m = s.output.monitors[0];
+    ASSERT_TRUE(m.gauge);
+    EXPECT_EQ(*m.gauge, (Vec3{0.1, 0.0, dim == 3 ? 0.05 : 0.0}));
+    EXPECT_FALSE(m.at);
+    EXPECT_FALSE(m.particle);
+    const json resolved = to_json(s);
+    EXPECT_EQ(resolved["output"]["monitors"][0]["at"], dim == 3 ? json({0.1, 0.05}) : json::array({0.1}));
+    EXPECT_FALSE(resolved["output"]["monitors"][0].contains("phase"));
+    const Scene r = parse_scene(resolved, "t.json");
+    EXPECT_EQ(to_json(r), resolved);
+    EXPECT_EQ(r.output.monitors[0].gauge, m.gauge);
+    EXPECT_EQ(r.output.monitors[0].quantities, m.quantities);
+  }
+}
+
+TEST(SceneErrors, WaterLevelGaugeRules) {
+  json j = pond(2);  // [x] in 2D
+  j["output"]["monitors"][0]["at"] = {0.1, 0.2};
+  EXPECT_TRUE(reports(j, "/output/monitors/0/at", "(2 components), expected 1 number, x of the water_level gauge"));
+  json k = pond(3);  // [x, z] in 3D
+  k["output"]["monitors"][0]["at"] = {0.1};
+  EXPECT_TRUE(reports(k, "/output/monitors/0/at", "(1 components), expected 2 numbers, x and z"));
+  k["output"]["monitors"][0]["at"] = {0.1, 0.2, 0.05};
+  EXPECT_TRUE(reports(k, "/output/monitors/0/at", "(3 components), expected 2 numbers, x and z"));
+  json l = pond(2);  // water_level alone
+  l["output"]["monitors"][0]["quantities"] = {"velocity_x", "water_level"};
+  EXPECT_TRUE(reports(l, "/output/monitors/0/quantities/0", "in a water_level gauge, expected only \"water_level\""));
+  using KeyValue = std::pair<std::string, json>;
+  for (const auto& [key, value] : {KeyValue{"phase", "fluid"}, KeyValue{"points", "water"}, KeyValue{"particle", 3}}) {
+    json m = pond(2);
+    m["output"]["monitors"][0][key] = value;
+    EXPECT_TRUE(reports(m, "/output/monitors/0/" + key, "in a water_level gauge, expected none of"));
+  }
+  json n = pond(2);
+  n["output"]["monitors"][0].erase("at");
+  EXPECT_TRUE(reports(n, "/output/monitors/0/at", "missing, expected the vertical line of the water_level gauge"));
+  json o = pond(2);  // inside the grid
+  o["output"]["monitors"][0]["at"] = {0.3};
+  EXPECT_TRUE(reports(o, "/output/monitors/0/at", "expected a vertical line inside the grid: x in [0, 0.2]"));
+  json p = pond(3);
+  p["output"]["monitors"][0]["at"] = {0.1, -0.01};
+  EXPECT_TRUE(reports(p, "/output/monitors/0/at", "z in [0, 0.1]"));
+  // Only the formulations with liquid points read it.
+  json q = scene_2d();
+  q["output"]["monitors"][0] = {{"name", "gauge"}, {"at", {0.05}}, {"quantities", {"water_level"}}};
+  EXPECT_TRUE(reports(q, "/output/monitors/0/quantities/0",
+                      "got \"water_level\", but formulation \"explicit-single-point\" has no liquid points; expected "
+                      "a formulation that reads it: semi-implicit-double-point, explicit-double-point"));
+  json r = scene_3d();  // and a fluid
+  r["output"]["monitors"][0] = {{"name", "gauge"}, {"at", {0.5, 0.5}}, {"quantities", {"water_level"}}};
+  EXPECT_TRUE(reports(r, "/output/monitors/0/quantities/0", "the scene has no fluid phase"));
 }
 
 TEST(SceneErrors, MaterialRules) {
