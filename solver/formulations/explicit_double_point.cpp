@@ -586,7 +586,11 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
       // support. (Switching at the soil's half volume fraction instead: seepage 9 % low at
       // h = 25 mm and 19 % at 12.5 mm; this: 13 % and 4 %.)
       const double Vw = liquid_volume(ws, static_cast<int>(p));
-      ws.V[p] = inside ? Vw * soil / n_soil : soil == 0.0 ? Vw : ws.V[p] * (1.0 + dt * div_l);
+      // Following the liquid, V stays between the two: the liquid's own volume (free) and its
+      // volume over the soil's porosity (in the soil) — a drift beyond (a dilating shear zone
+      // at the soil's edge) made n^ tiny and K_L / n^ unstable (the d = 7 mm Darcy collapse).
+      const double V_soil = soil > 0.0 ? Vw * soil / n_soil : Vw;
+      ws.V[p] = inside ? V_soil : soil == 0.0 ? Vw : std::clamp(ws.V[p] * (1.0 + dt * div_l), Vw, std::max(Vw, V_soil));
       ws.n[p] = nh;
       const bool surface = phi < kFreeSurfaceFraction;
       free_surface_[p] = surface ? 1 : 0;
