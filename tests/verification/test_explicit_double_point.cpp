@@ -378,3 +378,37 @@ TEST(ExplicitDoublePoint, SlowC2ColumnCollapseAndDragStudy) {
   EXPECT_LT(std::abs(v[2].liquid_front - v[2].solid_front), 0.1);  // Ergun holds the liquid in the soil
   EXPECT_LT(v[2].dry, 0.02);
 }
+
+// 3D: the bed under free water of examples/soil-under-water-double-point as a 0.1 x 0.8 x 0.1 m
+// column (rollers on the four sides), 1 s at rest; the water_level gauge on its axis.
+TEST(ExplicitDoublePoint, SoilUnderFreeWaterStaysHydrostatic3D) {
+  json s = load_json(SWMPM_SOURCE_DIR "/examples/soil-under-water-double-point/scene.json");
+  s["dimension"] = 3;
+  s["gravity"] = {0.0, -9.81, 0.0};
+  s["grid"]["min"] = {0.0, 0.0, 0.0};
+  s["grid"]["max"] = {0.1, 0.8, 0.1};
+  for (auto& b : s["bodies"]) {
+    b["geometry"]["min"] = {0.0, b["geometry"]["min"][1], 0.0};
+    b["geometry"]["max"] = {0.1, b["geometry"]["max"][1], 0.1};
+  }
+  s["boundaries"].push_back({{"on", "z_min"}, {"solid", "roller"}, {"fluid", "impermeable"}});
+  s["boundaries"].push_back({{"on", "z_max"}, {"solid", "roller"}, {"fluid", "impermeable"}});
+  s["time"]["end"] = 1.0;
+  s["output"]["monitors"] = json::parse(R"([{"name": "level", "at": [0.05, 0.05], "quantities": ["water_level"]}])");
+  const std::string run = run_scene(s, "edp-hydrostatic-3d");
+  const auto water = swmpm::testing::last_frame(run, "fluid");
+  const auto& p = water.get("pore_pressure", "fluid").values;
+  const auto& v = water.get("velocity", "fluid").values;
+  double worst = 0.0, v_max = 0.0;
+  for (std::size_t i = 0; i < water.size(); ++i) {
+    worst = std::max(worst, std::abs(p[i] - 9810.0 * (0.6 - water.points[i][1])) / (9810.0 * 0.6));
+    v_max = std::max(v_max, std::sqrt(v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] + v[3 * i + 2] * v[3 * i + 2]));
+  }
+  const auto m = read_monitors(run);
+  const double level = m.rows.back()[m.col("level.water_level")];
+  std::printf("hydrostatics 3D: max |p - rho g d| / (rho g H) %.4f, max |v_w| %.2e m/s, water level %.5f m\n", worst, v_max,
+              level);
+  EXPECT_LT(worst, 0.01);
+  EXPECT_LT(v_max, 1e-3 * std::sqrt(9.81 * 0.6));
+  EXPECT_NEAR(level, 0.6, 1e-3);
+}
