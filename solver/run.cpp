@@ -144,6 +144,15 @@ struct Clock {
     initialising = init.enabled();
   }
   bool ended(double t) const { return t >= end - eps_t; }
+  /// The first mark of the lattice mark + k interval after time t (+ eps_t), in one step: adding
+  /// the interval until it passes t spun for ever where the interval is below t's round-off
+  /// (output.interval 1e-20 at t = 0.01: mark + interval == mark).
+  double next_mark(double mark, double interval, double t) const {
+    if (!(interval > 0.0) || mark > t + eps_t) return mark;
+    const double k = std::floor((t + eps_t - mark) / interval) + 1.0;
+    const double next = mark + k * interval;
+    return next > t + eps_t ? next : std::nextafter(t + eps_t, std::numeric_limits<double>::infinity());
+  }
 
   template <int Dim>
   Step next(const scene::Scene& s, const Formulation<Dim>& f, const State<Dim>& st) const {
@@ -338,11 +347,31 @@ class Runner {
       state_.surfaces = surface_samples_from_cloud<Dim>(scene::read_vtu(surfaces.string()), surfaces.string());
     }
     f_ = factory_ ? factory_(scene_, state_) : make_formulation<Dim>(scene_, state_);
+    refuse_intervals_below_the_step();
     reporters_ = make_materials<Dim>(scene_);  // frames' material state fields (pure functions of the particles)
     compression_ = scene::vtu_compression(scene_.output.compression);
     threads_ = omp_get_max_threads();
     // --resume: the checkpoint must be this scene's and this version's.
     if (opt_.resume) resume_ = read_checkpoint(f_->name());
+  }
+
+  /// An output interval below the time step would write every step (and one of 1e-20 s made the
+  /// loop spin): refused with the key, the value and the step, before anything is written (exit 2).
+  void refuse_intervals_below_the_step() const {
+    std::string reason;
+    const double dt = scene_.time.dt ? *scene_.time.dt : scene_.time.cfl * f_->critical_time_step(state_, reason);
+    std::vector<std::string> problems;
+    auto check = [&](const char* path, double interval, const char* zero) {
+      if (interval > 0.0 && interval < dt)
+        problems.push_back((dir_ / "scene.json").string() + ": " + path + ": got " + fmt(interval) +
+                           " s, below the time step dt = " + fmt(dt) + " s" +
+                           (scene_.time.dt ? "" : " (time.cfl x the critical step)") + "; expected " +
+                           (*zero ? std::string("0 (") + zero + ") or " : std::string()) + "at least dt");
+    };
+    check("/output/interval", scene_.output.interval, "the first and last frames only");
+    check("/output/monitor_interval", scene_.output.monitor_interval, "a row every step");
+    if (scene_.output.checkpoint_interval) check("/output/checkpoint_interval", *scene_.output.checkpoint_interval, "");
+    if (!problems.empty()) throw scene::SceneError(problems);
   }
 
   /// The run directory: an earlier solve's files give way (only those swmpm wrote), a file of a
@@ -508,19 +537,19 @@ class Runner {
     }
     if (due.monitor) {
       monitors_->record(state_, *f_, guard_.work);
-      next_monitor_ += scene_.output.monitor_interval;
-      if (scene_.output.monitor_interval > 0)
-        while (next_monitor_ <= state_.time + clock_.eps_t) next_monitor_ += scene_.output.monitor_interval;
+      next_monitor_ = scene_.output.monitor_interval > 0
+                          ? clock_.next_mark(next_monitor_, scene_.output.monitor_interval, state_.time)
+                          : next_monitor_;
     }
     if (due.frame) {
       write_frame(state_.time);
       if (scene_.output.interval > 0)
-        while (next_frame_ <= state_.time + clock_.eps_t) next_frame_ += scene_.output.interval;
+        next_frame_ = clock_.next_mark(next_frame_, scene_.output.interval, state_.time);
       else
         next_frame_ = clock_.end;
     }
     if (due.restart) {
-      while (next_restart_ <= state_.time + clock_.eps_t) next_restart_ += restart_interval();
+      next_restart_ = clock_.next_mark(next_restart_, restart_interval(), state_.time);
       write_checkpoint();
     }
   }

@@ -364,3 +364,41 @@ TEST(FullDisk, FullFilesystemStopsTheRunAndPreprocessWritesNothing) {
   EXPECT_NE(read_text((dir / "err2.txt").string()).find("No space left on device"), std::string::npos);
   EXPECT_EQ(read_text((dir / "listing.txt").string()), "filler\nrun\n") << "preprocess left nothing on the full disk";
 }
+
+// Issue 27, item 4: an output interval below the time step is refused before anything is written
+// (output.interval 1e-20 s spun at 100 % CPU after 2-3 frames: adding it to the next frame's time
+// no longer changed it). Fixed dt and dt "auto" alike; each key named.
+TEST(Hangs, IntervalsBelowTheTimeStepAreRefused) {
+  const fs::path dir = swmpm::testing::scratch("hangs-intervals");
+  for (const char* key : {"interval", "monitor_interval", "checkpoint_interval"})
+    for (bool fixed_dt : {true, false}) {
+      json s = column_scene();
+      s["time"]["end"] = 0.01;
+      if (fixed_dt) s["time"]["dt"] = 1e-4;
+      else s["time"].erase("dt");
+      s["output"][key] = 1e-20;
+      write(dir / "scene.json", s.dump(2));
+      const fs::path run = dir / (std::string(key) + (fixed_dt ? "-fixed" : "-auto"));
+      ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run.string() + " -q", dir).status, 0);
+      const Result r = swmpm_cmd("solve " + run.string() + " -q", dir);
+      EXPECT_EQ(r.status, 2) << key << ": " << r.err;
+      EXPECT_NE(r.err.find(std::string("/output/") + key + ": got 1e-20 s, below the time step"), std::string::npos) << r.err;
+      EXPECT_FALSE(fs::exists(run / "run.json")) << key;
+      EXPECT_FALSE(fs::exists(run / "output")) << key;
+    }
+}
+
+// An interval equal to the step (the smallest allowed): a frame and a monitor row every step, each
+// next mark computed in one step from the lattice of marks, and the run ends.
+TEST(Hangs, TinyIntervalsAboveTheStepStillEnd) {
+  const fs::path dir = swmpm::testing::scratch("hangs-tiny");
+  json s = column_scene();
+  s["time"]["end"] = 2e-3;
+  s["time"]["dt"] = 1e-4;
+  s["output"]["interval"] = 1e-4;
+  s["output"]["monitor_interval"] = 1e-4;
+  write(dir / "scene.json", s.dump(2));
+  const Result r = swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + (dir / "run").string() + " -q", dir);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(swmpm::testing::load_json((dir / "run" / "run.json").string())["status"], "completed");
+}
