@@ -150,6 +150,7 @@ TEST(Divergence, StopsWithDiagnosisAndKeepsLastGoodState) {
   json s = good_scene();
   s["time"]["dt"] = 2.0e-2;
   s["output"]["interval"] = 0.1;  // frames at t = 0 and every 5 steps; snapshots every 50 (default)
+  s["output"]["monitor_interval"] = 2.0e-2;  // a row every step (an interval below dt is refused)
   const fs::path dir = swmpm::testing::scratch("diverge");
   std::ofstream(dir / "scene.json") << s.dump(2);
   const fs::path run = dir / "run";

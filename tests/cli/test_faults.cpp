@@ -316,11 +316,13 @@ void expect_failed_cleanly(const fs::path& run, int status, const std::string& e
     EXPECT_EQ(e.path().filename().string().find(".swmpm-"), std::string::npos) << e.path();
 }
 
-/// The column with a frame and a monitor row every step for 0.5 s (550 steps).
+/// The column with a frame and a monitor row every step for 0.5 s (556 steps of 9e-4 s; an
+/// interval below the step is refused, so the interval is the step).
 json frame_every_step() {
   json s = column_scene();
   s["time"]["end"] = 0.5;
-  s["output"]["interval"] = 1e-4;
+  s["time"]["dt"] = 9e-4;
+  s["output"]["interval"] = 9e-4;
   s["output"]["monitor_interval"] = 0.0;
   return s;
 }
