@@ -8,7 +8,8 @@
 //    return (= 0 on the cone, the apex and the cut-off circle), σ_m <= T, elastic states
 //    bit-identical, the cone's plastic strain along ∂Ψ/∂σ (ψ = 0: no volumetric plastic strain);
 //  - objectivity: a rigid rotation R (one Cayley step of a spin) gives R σ R^T;
-//  - an isochoric triaxial compression at constant p reaches q/p = √3 η (c = 0), with SRF 1 and 2.
+//  - an isochoric triaxial compression at constant p reaches q/p = √3 η (c = 0), with SRF 1 and 2;
+//    the drained triaxial of `swmpm element` (constant lateral stress) fails at q/p = √3 η too.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "scene/scene.hpp"
+#include "solver/element.hpp"
 #include "solver/materials/drucker_prager.hpp"
 #include "solver/materials/material.hpp"
 #include "solver/transfer/transfer.hpp"
@@ -353,6 +355,28 @@ TEST(DruckerPrager, TriaxialCompressionReachesTheLimitRatio) {
       }
     }
   }
+}
+
+TEST(DruckerPrager, DrainedTriaxialReachesTheLimitRatio) {
+  // The conventional drained triaxial of `swmpm element` (solver/element.cpp: lateral stress held
+  // at p0 by a Newton iteration on the lateral stretch, Δq = 3Δp), c = 0, φ = 30°, ψ = 0, from
+  // p0 = 100 kPa to 5 % axial strain: failure at q/p = √3 η = 0.83205, i.e. (Δq = 3Δp)
+  // p_f = p0 / (1 − η/√3) = 138.38 kPa; past it ψ = 0 keeps the volume constant.
+  const double p0 = 100e3, phi = 30;
+  scene::Scene s = finite_strain();
+  s.materials.push_back(dp_material(0.0, phi, 0.0, 1.0, 0.0));
+  const auto r = run_element(s, "soil", ElementTest::drained_triaxial, p0, 0.05, 200);
+  const auto m = params(0.0, phi, 0.0);
+  const double ratio = std::sqrt(3.0) * m.eta, p_f = p0 / (1 - m.eta / std::sqrt(3.0));
+  const std::size_t n = r.size();
+  std::printf("drained triaxial: q/p end = %.8f (sqrt3 eta = %.8f, rel. %.1e), p end = %.2f Pa (closed form %.2f, "
+              "rel. %.1e), radial %.1e, eps_v last steps %.6e -> %.6e\n", r.q.back() / r.p.back(), ratio,
+              std::abs(r.q.back() / r.p.back() / ratio - 1), r.p.back(), p_f, std::abs(r.p.back() / p_f - 1),
+              std::abs(r.radial_stress.back() / p0 - 1), r.volumetric_strain[n - 2], r.volumetric_strain[n - 1]);
+  EXPECT_NEAR(r.q.back() / r.p.back(), ratio, 1e-6 * ratio);
+  EXPECT_NEAR(r.p.back(), p_f, 1e-6 * p_f);
+  EXPECT_NEAR(r.radial_stress.back(), p0, 1e-6 * p0);
+  EXPECT_NEAR(r.volumetric_strain[n - 1], r.volumetric_strain[n - 2], 1e-9);
 }
 
 TEST(DruckerPrager, PlasticFlowSwitchedOffIsTheElasticModel) {
