@@ -277,11 +277,15 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
   if (!scene::row_of(s.formulation).implemented)
     reject("/formulation: got \"" + scene::to_string(s.formulation) + "\", which is not implemented in this version; "
            "expected one of " + scene::implemented_formulations() + " (or \"auto\")");
-  // Nor-Sand is a finite-strain model (Borja & Andrade 2006).
-  for (std::size_t k = 0; k < s.materials.size(); ++k)
-    if (s.materials[k].model == scene::MaterialModel::nor_sand && s.solver.kinematics != "finite-strain")
+  // Nor-Sand (Borja & Andrade 2006) and Drucker-Prager (Hencky elasticity, seed 004) are
+  // finite-strain models.
+  for (std::size_t k = 0; k < s.materials.size(); ++k) {
+    const auto model = s.materials[k].model;
+    if ((model == scene::MaterialModel::nor_sand || model == scene::MaterialModel::drucker_prager) &&
+        s.solver.kinematics != "finite-strain")
       reject("/solver/kinematics: got \"" + s.solver.kinematics + "\", but material \"" + s.materials[k].name +
-             "\" is nor-sand, a finite-strain model; expected \"finite-strain\"");
+             "\" is " + scene::to_string(model) + ", a finite-strain model; expected \"finite-strain\"");
+  }
   std::ifstream in(scene_path);
   const auto raw = nlohmann::json::parse(in, nullptr, false);
   if (raw.is_discarded() || !raw.contains("solver")) return;
@@ -295,7 +299,7 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
            s.solver.stabilisation.fbar + "\"); remove the key or set fbar to \"modified\"");
   if (solver.contains("kinematics") && !scene::reads_switch(s, "kinematics"))
     reject("/solver/kinematics: no material of the scene reads it (linear-elastic follows the Jaumann rate, hencky "
-           "is finite strain; only mohr-coulomb and nor-sand read the switch); remove the key");
+           "is finite strain; only mohr-coulomb, drucker-prager and nor-sand read the switch); remove the key");
 }
 
 /// The run directory preprocess writes: a folder that holds an earlier run is cleared (only the

@@ -555,7 +555,7 @@ const Table& solver_table() {
           {.name = "damping", .def = 0.0, .range = half_open(0, 1), .unit = "-",
            .meaning = "Local (Cundall) damping coefficient."},
           {.name = "kinematics", .type = Type::choice, .def = "finite-strain",
-           .values = {"small-strain", "finite-strain"}, .meaning = "Strain measure of the `mohr-coulomb` update (`nor-sand`: finite strain only); refused when no material reads it."},
+           .values = {"small-strain", "finite-strain"}, .meaning = "Strain measure of the `mohr-coulomb` update (`drucker-prager`, `nor-sand`: finite strain only); refused when no material reads it."},
           {.name = "continuity", .type = Type::choice,
            .values = {"non-conservative", "conservative"},
            .meaning = "Two-phase mixture volume balance: `non-conservative` (1 − n) div v_s + n div v_w "

@@ -58,10 +58,13 @@ bool reads_switch(const Scene& s, const std::string& key) {
   if (key == "pressure") return row_of(s.formulation).find("/solver/stabilisation/pressure") != nullptr;
   if (key == "fbar_patch") return s.solver.stabilisation.fbar == "modified";
   if (key == "kinematics") {
-    // mohr-coulomb and nor-sand read it (nor-sand: finite strain only), in every formulation; the
-    // other models follow their own kinematics (linear-elastic: Jaumann rate, hencky: finite).
+    // mohr-coulomb, drucker-prager and nor-sand read it (drucker-prager, nor-sand: finite strain
+    // only), in every formulation; the other models follow their own kinematics (linear-elastic:
+    // Jaumann rate, hencky: finite).
     for (const auto& m : s.materials)
-      if (m.model == MaterialModel::mohr_coulomb || m.model == MaterialModel::nor_sand) return true;
+      if (m.model == MaterialModel::mohr_coulomb || m.model == MaterialModel::drucker_prager ||
+          m.model == MaterialModel::nor_sand)
+        return true;
     return false;
   }
   return true;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "solver/materials/drucker_prager.hpp"
 #include "solver/materials/hencky_trial.hpp"
 #include "solver/materials/material.hpp"
 #include "solver/materials/mohr_coulomb.hpp"
@@ -143,12 +144,14 @@ std::unique_ptr<MaterialModel<Dim>> make_material(const scene::Material& m, cons
       return std::make_unique<Hencky<Dim>>(Elastic::from(m.at("youngs_modulus"), m.at("poisson_ratio")));
     case MaterialModel::mohr_coulomb:
       return make_mohr_coulomb<Dim>(m, s);  // materials/mohr_coulomb.cpp
+    case MaterialModel::drucker_prager:
+      return make_drucker_prager<Dim>(m, s);  // materials/drucker_prager.cpp
     case MaterialModel::nor_sand:
       return make_nor_sand<Dim>(m, s);  // materials/nor_sand.cpp
     default:
       throw std::runtime_error("material \"" + m.name + "\": model \"" + scene::to_string(m.model) +
                                "\" is not implemented yet in this version (available: linear-elastic, hencky, "
-                               "mohr-coulomb, nor-sand)");
+                               "mohr-coulomb, drucker-prager, nor-sand)");
   }
 }
 

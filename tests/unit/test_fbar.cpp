@@ -366,7 +366,7 @@ TEST(FBar, EveryModelRealisesTheShiftAndIgnoresAHomogeneousState) {
     check_model<2>(M::mohr_coulomb, kin, s0);
     check_model<3>(M::mohr_coulomb, kin, s0);
   }
-  for (M model : {M::linear_elastic, M::hencky, M::nor_sand}) {
+  for (M model : {M::linear_elastic, M::hencky, M::drucker_prager, M::nor_sand}) {
     check_model<2>(model, "finite-strain", s0);
     check_model<3>(model, "finite-strain", s0);
   }
