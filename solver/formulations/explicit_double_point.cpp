@@ -207,18 +207,29 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         nu_max = std::max(nu_max, liquid_[k].mu * viscosity_factor_max() / liquid_[k].rho);
       }
     const double K_L = max_liquid_modulus(), rho_L = min_liquid_density();
+    // Called every step with dt "auto": the per-point maxima in parallel (a max does not depend on
+    // the order), of the squares, with one square root each.
+    double c2_solid = 0.0;
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       if (material_particles_[k].empty() || !materials_[k]) continue;
       const double M_s = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
-      for (int p : material_particles_[k]) {
+      const auto& ids = material_particles_[k];
+      const long m = static_cast<long>(ids.size());
+#pragma omp parallel for schedule(static) reduction(max : c2_solid) if (m > parallel_threshold)
+      for (long j = 0; j < m; ++j) {
+        const int p = ids[j];
         const double n = ps.n[p], rho_bar = ps.m[p] / ps.V[p], rho_S = rho_bar / (1.0 - n);
-        const double c2 = M_s / rho_bar + K_L * ((1.0 - n) / (n * rho_S) + 1.0 / rho_L);
-        c_solid = std::max(c_solid, std::sqrt(c2));
+        c2_solid = std::max(c2_solid, M_s / rho_bar + K_L * ((1.0 - n) / (n * rho_S) + 1.0 / rho_L));
       }
     }
-    double v_max = 0.0;
-    for (std::size_t p = 0; p < ps.size(); ++p) v_max = std::max(v_max, ps.v[p].norm());
-    for (std::size_t p = 0; p < ws.size(); ++p) v_max = std::max(v_max, ws.v[p].norm());
+    c_solid = std::sqrt(c2_solid);
+    double v2_max = 0.0;
+    for (const ParticleSet<Dim>* set : {&ps, &ws}) {
+      const long m = static_cast<long>(set->size());
+#pragma omp parallel for schedule(static) reduction(max : v2_max) if (m > parallel_threshold)
+      for (long p = 0; p < m; ++p) v2_max = std::max(v2_max, set->v[p].squaredNorm());
+    }
+    const double v_max = std::sqrt(v2_max);
     const double h = grid_.h();
     const double dt_wave = h / (std::max(c_solid, c_liquid) + v_max);
     const double dt_visc = nu_max > 0.0 ? h * h / (2.0 * Dim * nu_max) : std::numeric_limits<double>::infinity();
@@ -441,6 +452,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         nh += N * node_[i].n;
         grad_n += node_[i].n * dN;
       });
+      ws.n[p] = nh;  // the porosity the liquid's update (5) reads, with these shape data
       const double m = ws.m[p], pp = ws.p[p], V = ws.V[p];
       const double pV = pp * V, lq = nh * pV, sq = pV - lq;
       const MatD<Dim> T = (nh * V) * to_matrix(ws.sigma[p]).template topLeftCorner<Dim, Dim>();
@@ -555,8 +567,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
 #pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       const Liquid& l = liquid_[ws.material[p]];
-      double nh = 0.0;
-      shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const Vec<Dim>&) { nh += N * node_[i].n; });
+      const double nh = ws.n[p];  // n^ of (2c), the same shape data and nodal porosity
       const double mu = effective_viscosity(l.mu, nh);
       double div_s = 0.0, div_l = 0.0, phi = 0.0, soil = 0.0, n_soil = 0.0;
       bool inside = true;  // every node of the support is full of solid
@@ -591,7 +602,6 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
       // at the soil's edge) made n^ tiny and K_L / n^ unstable (the d = 7 mm Darcy collapse).
       const double V_soil = soil > 0.0 ? Vw * soil / n_soil : Vw;
       ws.V[p] = inside ? V_soil : soil == 0.0 ? Vw : std::clamp(ws.V[p] * (1.0 + dt * div_l), Vw, std::max(Vw, V_soil));
-      ws.n[p] = nh;
       const bool surface = phi < kFreeSurfaceFraction;
       free_surface_[p] = surface ? 1 : 0;
       Sym tau = Sym::Zero();
