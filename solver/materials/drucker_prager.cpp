@@ -58,12 +58,8 @@ class DruckerPrager final : public MaterialModel<Dim> {
   /// Stored elastic energy ½ τ : C⁻¹ : τ per reference volume times V0 (= ψ of Hencky elasticity,
   /// seed 004 eq. 16, in the elastic logarithmic strain), τ = J σ.
   double strain_energy(const ParticleSet<Dim>& ps, int p) const override {
-    const Sym& s = ps.sigma[p];
     const double J = ps.F[p].determinant();
-    const double tr = s[0] + s[1] + s[2];
-    const double ss = s[0] * s[0] + s[1] * s[1] + s[2] * s[2] + 2.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]);
-    const double w = 0.5 * ((1.0 + e_.nu) / e_.E * ss - e_.nu / e_.E * tr * tr);
-    return w * J * J * ps.V0[p];
+    return hencky::complementary_energy_density(e_, ps.sigma[p]) * J * J * ps.V0[p];
   }
 
  private:

@@ -87,4 +87,13 @@ inline double volumetric_strain(const Elastic& e, const Sym& s, double Jn) {
   return Jn * (s[0] + s[1] + s[2]) / (3.0 * e.K);
 }
 
+/// Complementary elastic energy density ½ s : C⁻¹ : s [J/m³] of a stress s in Voigt form (shear
+/// entries counted twice): (1 + ν)/(2E) s:s − ν/(2E) (tr s)². With s = τ it is Hencky's ψ per
+/// reference volume (mohr-coulomb and drucker-prager multiply by J² V0 for τ = J σ).
+inline double complementary_energy_density(const Elastic& e, const Sym& s) {
+  const double tr = s[0] + s[1] + s[2];
+  const double ss = s[0] * s[0] + s[1] * s[1] + s[2] * s[2] + 2.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]);
+  return 0.5 * ((1.0 + e.nu) / e.E * ss - e.nu / e.E * tr * tr);
+}
+
 }  // namespace swmpm::hencky

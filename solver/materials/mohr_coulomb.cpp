@@ -56,11 +56,8 @@ class MohrCoulomb final : public MaterialModel<Dim> {
   /// Stored elastic energy. Finite strain: ½ τ : C⁻¹ : τ per reference volume times V0 (= ψ of
   /// Hencky elasticity in the elastic logarithmic strain); small strain: ½ σ : C⁻¹ : σ V.
   double strain_energy(const ParticleSet<Dim>& ps, int p) const override {
-    const Sym& s = ps.sigma[p];
     const double J = finite_ ? ps.F[p].determinant() : 1.0;
-    const double tr = s[0] + s[1] + s[2];
-    const double ss = s[0] * s[0] + s[1] * s[1] + s[2] * s[2] + 2.0 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]);
-    const double w = 0.5 * ((1.0 + e_.nu) / e_.E * ss - e_.nu / e_.E * tr * tr);
+    const double w = hencky::complementary_energy_density(e_, ps.sigma[p]);
     return finite_ ? w * J * J * ps.V0[p] : w * ps.V[p];
   }
 
