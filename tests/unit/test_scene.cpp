@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "scene/scene.hpp"
+#include "support/pond_scene.hpp"
 
 namespace {
 
@@ -625,29 +626,7 @@ TEST(SceneErrors, MonitorRules) {
 }
 
 /// A pond of free water (explicit-double-point) with a water_level gauge, in 2D or 3D.
-json pond(int dim) {
-  json j = json::parse(R"json({
-    "name": "pond", "dimension": 2, "formulation": "explicit-double-point", "gravity": [0, -9.81],
-    "grid": { "cell_size": 0.05, "min": [0, 0], "max": [0.2, 0.5], "shape_function": "gimp" },
-    "materials": [ { "name": "water", "model": "fluid", "density": 1000, "bulk_modulus": 2e6 } ],
-    "bodies": [ { "name": "pond", "geometry": { "type": "box", "min": [0, 0], "max": [0.2, 0.3] },
-                  "fluid": "water", "initial": { "pore_pressure": "hydrostatic" } } ],
-    "boundaries": [ { "on": "x_min", "fluid": "impermeable" }, { "on": "x_max", "fluid": "impermeable" },
-                    { "on": "y_min", "fluid": "impermeable" } ],
-    "time": { "end": 0.2 },
-    "output": { "monitors": [ { "name": "gauge", "at": [0.1], "quantities": ["water_level"] } ] }
-  })json");
-  if (dim == 3) {
-    j["dimension"] = 3;
-    j["gravity"] = {0, -9.81, 0};
-    j["grid"]["min"] = {0, 0, 0};
-    j["grid"]["max"] = {0.2, 0.5, 0.1};
-    j["bodies"][0]["geometry"]["min"] = {0, 0, 0};
-    j["bodies"][0]["geometry"]["max"] = {0.2, 0.3, 0.1};
-    j["output"]["monitors"][0]["at"] = {0.1, 0.05};
-  }
-  return j;
-}
+json pond(int dim) { return swmpm::testing::pond_scene(dim); }
 
 TEST(Scene, WaterLevelGaugeKeepsItsVerticalLineThroughTheRoundTrip) {
   for (int dim : {2, 3}) {

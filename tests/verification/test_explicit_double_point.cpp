@@ -8,13 +8,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <fstream>
 #include <set>
-#include <sstream>
 
 #include "scene/pointcloud.hpp"
 #include "support/indicators.hpp"
 #include "support/run_helpers.hpp"
+#include "support/seepage.hpp"
 
 namespace {
 
@@ -22,36 +21,8 @@ using nlohmann::json;
 using swmpm::testing::load_json;
 using swmpm::testing::run_scene;
 
-/// monitors.csv as columns by name.
-struct Monitors {
-  std::vector<std::string> names;
-  std::vector<std::vector<double>> rows;
-  std::size_t col(const std::string& n) const {
-    const auto it = std::find(names.begin(), names.end(), n);
-    EXPECT_NE(it, names.end()) << n;
-    return static_cast<std::size_t>(it - names.begin());
-  }
-};
-Monitors read_monitors(const std::string& run) {
-  Monitors m;
-  std::ifstream in(run + "/monitors.csv");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::stringstream ss(line);
-    std::string cell;
-    std::vector<std::string> cells;
-    while (std::getline(ss, cell, ',')) cells.push_back(cell);
-    if (m.names.empty()) {
-      m.names = cells;
-      continue;
-    }
-    std::vector<double> r;
-    for (const auto& c : cells) r.push_back(std::stod(c));
-    m.rows.push_back(r);
-  }
-  return m;
-}
+/// RUN/monitors.csv (postprocess's reader: the header's names, a column each).
+swmpm::post::Table read_monitors(const std::string& run) { return swmpm::post::read_csv(run + "/monitors.csv"); }
 
 /// Terzaghi: p / p0 at depth z below the drained top of a layer of height H = 1 m.
 double terzaghi(double z, double Tv) {
@@ -74,21 +45,24 @@ TEST(ExplicitDoublePoint, C1ConsolidationMatchesSinglePointAndTerzaghi) {
   const auto sp = read_monitors(run_scene(load_json(dir + "scene-single-point.json"), "edp-c1-single"));
   const double k = 1.0214e-10 * 1000.0 * 9.81 / 1.002e-3, E = 1.0e7, nu = 0.2, n = 0.4, K_L = 2.15e7, p0 = 1.0e4;
   const double E_oed = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)), c_v = k / (9810.0 * (1 / E_oed + n / K_L));
-  ASSERT_EQ(dp.rows.size(), sp.rows.size());
+  const auto& t_dp = dp.column("time");
+  const auto& t_sp = sp.column("time");
+  ASSERT_EQ(t_dp.size(), t_sp.size());
   const std::pair<const char*, double> gauges[] = {
       {"base", 0.00625}, {"quarter", 0.25625}, {"mid", 0.50625}, {"three_quarters", 0.75625}};
   for (const auto& [name, y] : gauges) {
-    const std::size_t cd = dp.col(std::string(name) + ".pore_pressure"), cs = sp.col(std::string(name) + ".pore_pressure");
+    const auto& p_dp = dp.column(std::string(name) + ".pore_pressure");
+    const auto& p_sp = sp.column(std::string(name) + ".pore_pressure");
     double e_dp = 0, e_sp = 0, diff = 0;
     int count = 0;
-    for (std::size_t r = 0; r < dp.rows.size(); ++r) {
-      const double t = dp.rows[r][0], Tv = c_v * t;
-      ASSERT_NEAR(t, sp.rows[r][0], 2e-4);  // the row after each 5 ms mark; the two dt differ
+    for (std::size_t r = 0; r < t_dp.size(); ++r) {
+      const double t = t_dp[r], Tv = c_v * t;
+      ASSERT_NEAR(t, t_sp[r], 2e-4);  // the row after each 5 ms mark; the two dt differ
       if (Tv < 0.05) continue;
       const double ref = p0 * terzaghi(1.0 - y, Tv);
-      e_dp += std::pow((dp.rows[r][cd] - ref) / p0, 2);
-      e_sp += std::pow((sp.rows[r][cs] - ref) / p0, 2);
-      diff = std::max(diff, std::abs(dp.rows[r][cd] - sp.rows[r][cs]) / p0);
+      e_dp += std::pow((p_dp[r] - ref) / p0, 2);
+      e_sp += std::pow((p_sp[r] - ref) / p0, 2);
+      diff = std::max(diff, std::abs(p_dp[r] - p_sp[r]) / p0);
       ++count;
     }
     e_dp = std::sqrt(e_dp / count), e_sp = std::sqrt(e_sp / count);
@@ -151,29 +125,24 @@ TEST(ExplicitDoublePoint, E3DamBreakFrontFollowsMartinAndMoyce) {
   const json scene = load_json(SWMPM_SOURCE_DIR "/examples/dam-break-double-point/scene.json");
   const std::string run = run_scene(scene, "edp-dam-break");
   // Martin & Moyce's front Z = x / a against T (shared/refdata, copied into the example folder with its source).
-  std::vector<std::pair<double, double>> ref;
-  std::ifstream in(SWMPM_SOURCE_DIR "/examples/dam-break-double-point/martin-moyce-1952-front.csv");
-  std::string line;
-  while (std::getline(in, line))
-    if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) {
-      const auto comma = line.find(',');
-      ref.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
-    }
-  ASSERT_GE(ref.size(), 10u) << "refdata not found";
+  const auto mm = swmpm::post::read_reference(SWMPM_SOURCE_DIR "/examples/dam-break-double-point/martin-moyce-1952-front.csv");
+  const std::vector<double>& T_ref = mm.t;
+  const std::vector<double>& Z_ref = mm.v;
+  ASSERT_GE(T_ref.size(), 10u);
   const double a = 0.05715, g = 9.81;
   int compared = 0;
   double worst = 0.0;
   for (const auto& e : swmpm::scene::read_pvd(run + "/output/results.pvd")) {
     if (e.group != "fluid") continue;
     const double T = e.time * std::sqrt(2 * g / a);
-    if (T < 1.0 || T > ref.back().first) continue;
+    if (T < 1.0 || T > T_ref.back()) continue;
     const auto f = swmpm::scene::read_vtu(run + "/output/" + e.file);
     double x = 0.0;
     for (std::size_t i = 0; i < f.size(); ++i) x = std::max(x, f.points[i][0]);
     double Z = 0.0;
-    for (std::size_t k = 1; k < ref.size(); ++k)
-      if (T <= ref[k].first) {
-        Z = ref[k - 1].second + (ref[k].second - ref[k - 1].second) * (T - ref[k - 1].first) / (ref[k].first - ref[k - 1].first);
+    for (std::size_t k = 1; k < T_ref.size(); ++k)
+      if (T <= T_ref[k]) {
+        Z = Z_ref[k - 1] + (Z_ref[k] - Z_ref[k - 1]) * (T - T_ref[k - 1]) / (T_ref[k] - T_ref[k - 1]);
         break;
       }
     const double err = (x / a - Z) / Z;
@@ -212,30 +181,17 @@ TEST(ExplicitDoublePoint, E3DamBreakFrontFollowsMartinAndMoyce) {
 
 namespace {
 
-/// Seepage through the fixed gravel layer of examples/seepage-double-point (0.2 m thick, n = 0.4,
-/// D = 1 mm: kappa = 1.185e-9 m^2) under a pond of H = 0.4 m draining into the empty chamber below:
-/// the pond's fall rate q over 0.15-1.2 s against Darcy, q = k i, and against the root of the
-/// quadratic drag balance rho g i = (mu / kappa) q + beta rho q^2 (Ergun, beta = B / sqrt(kappa A n^3)),
-/// with i = (H + L) / L at the window's mean pond depth. Returns {q, q_darcy, q_ergun}.
+/// Seepage through the fixed gravel layer of examples/seepage-double-point (D = 1 mm:
+/// kappa = 1.185e-9 m^2) at cell size `cell`: the pond's fall rate over 0.15-1.2 s against Darcy and
+/// against Ergun's root (support/seepage.hpp). Returns {q, q_darcy, q_ergun}.
 std::array<double, 3> seepage_flux(const std::string& scene_file, const std::string& name, double cell) {
   json s = load_json(SWMPM_SOURCE_DIR "/examples/seepage-double-point/" + scene_file);
   s["grid"]["cell_size"] = cell;
   s["output"]["monitors"][0]["at"] = {0.1, 0.9 - cell / 4};  // the pond's top row of points
-  const auto m = read_monitors(run_scene(s, name));
-  const std::size_t d = m.col("pond_top.displacement_y");
-  auto row_at = [&](double t) {
-    return *std::min_element(m.rows.begin(), m.rows.end(),
-                             [&](const auto& a, const auto& b) { return std::abs(a[0] - t) < std::abs(b[0] - t); });
-  };
-  const auto a = row_at(0.15), b = row_at(1.2);
-  const double q = (a[d] - b[d]) / (b[0] - a[0]);
-  const double kappa = 1e-6 / 150 * 0.064 / 0.36, mu = 1e-3, rho = 1000, g = 9.81, L = 0.2;
-  const double H = 0.4 + 0.5 * (a[d] + b[d]), i = (H + L) / L, beta = 1.75 / std::sqrt(kappa * 150 * 0.064);
-  const double q_darcy = kappa * rho * g / mu * i;
-  const double q_ergun = (-mu / kappa + std::sqrt(std::pow(mu / kappa, 2) + 4 * beta * rho * rho * g * i)) / (2 * beta * rho);
+  const auto f = swmpm::testing::seepage_flux(run_scene(s, name), 1e-3, 0.15, 1.2);
   std::printf("seepage %s, h = %g m: q = %.5f m/s, Darcy %.5f (%+.1f %%), Ergun %.5f (%+.1f %%)\n", scene_file.c_str(),
-              cell, q, q_darcy, 100 * (q / q_darcy - 1), q_ergun, 100 * (q / q_ergun - 1));
-  return {q, q_darcy, q_ergun};
+              cell, f.q, f.q_darcy, 100 * (f.q / f.q_darcy - 1), f.q_ergun, 100 * (f.q / f.q_ergun - 1));
+  return {f.q, f.q_darcy, f.q_ergun};
 }
 
 }  // namespace
@@ -266,13 +222,14 @@ TEST(ExplicitDoublePoint, SlowSeepageConvergesToDarcyAndErgun) {
 TEST(ExplicitDoublePoint, SuspensionSettlesAtTerminalVelocityAndSediments) {
   const std::string run = run_scene(load_json(SWMPM_SOURCE_DIR "/examples/settling-double-point/scene.json"), "edp-settling");
   const auto m = read_monitors(run);
-  const std::size_t v = m.col("mid_grain.velocity_y");
+  const auto& time = m.column("time");
+  const auto& v_s = m.column("mid_grain.velocity_y");
   const double n = 0.7, D = 5e-4, kappa = D * D / 150 * std::pow(n, 3) / std::pow(1 - n, 2), k = kappa * 1000 * 9.81 / 1e-3;
   const double v_t = -(1 - n) * (2650.0 - 1000.0) / 1000.0 * k;
   double sum = 0.0;
   int count = 0;
-  for (const auto& r : m.rows)
-    if (r[0] >= 0.5 && r[0] <= 1.5) sum += r[v], ++count;
+  for (std::size_t r = 0; r < time.size(); ++r)
+    if (time[r] >= 0.5 && time[r] <= 1.5) sum += v_s[r], ++count;
   const double v_mean = sum / count;
   std::printf("settling: mean v_s %.5f m/s over 0.5-1.5 s, terminal %.5f m/s (%+.2f %%)\n", v_mean, v_t,
               100 * (v_mean / v_t - 1));
@@ -405,7 +362,7 @@ TEST(ExplicitDoublePoint, SoilUnderFreeWaterStaysHydrostatic3D) {
     v_max = std::max(v_max, std::sqrt(v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] + v[3 * i + 2] * v[3 * i + 2]));
   }
   const auto m = read_monitors(run);
-  const double level = m.rows.back()[m.col("level.water_level")];
+  const double level = m.column("level.water_level").back();
   std::printf("hydrostatics 3D: max |p - rho g d| / (rho g H) %.4f, max |v_w| %.2e m/s, water level %.5f m\n", worst, v_max,
               level);
   EXPECT_LT(worst, 0.01);

@@ -12,14 +12,14 @@
 // output/fluid_*.vtu (positions and half_size), NaN where the definition finds no point.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "scene/pointcloud.hpp"
+#include "support/pond_scene.hpp"
 #include "support/run_helpers.hpp"
 
 namespace {
@@ -31,30 +31,14 @@ using swmpm::testing::run_scene;
 constexpr double H = 0.3;          // m, depth of the pond
 constexpr double tolerance = 1e-3;  // m
 
+/// The pond (support/pond_scene.hpp) with three gauges: on a node line, on cell centres, on the wall.
 json pond(int dim) {
-  json j = json::parse(R"json({
-    "name": "pond", "dimension": 2, "formulation": "explicit-double-point", "gravity": [0, -9.81],
-    "grid": { "cell_size": 0.05, "min": [0, 0], "max": [0.2, 0.5], "shape_function": "gimp" },
-    "materials": [ { "name": "water", "model": "fluid", "density": 1000, "bulk_modulus": 2e6 } ],
-    "bodies": [ { "name": "pond", "geometry": { "type": "box", "min": [0, 0], "max": [0.2, 0.3] },
-                  "fluid": "water", "initial": { "pore_pressure": "hydrostatic" } } ],
-    "boundaries": [ { "on": "x_min", "fluid": "impermeable" }, { "on": "x_max", "fluid": "impermeable" },
-                    { "on": "y_min", "fluid": "impermeable" } ],
-    "time": { "end": 0.2 },
-    "output": { "interval": 0.2, "monitor_interval": 0.01, "monitors": [
+  json j = swmpm::testing::pond_scene(dim);
+  j["output"] = json::parse(R"json({ "interval": 0.2, "monitor_interval": 0.01, "monitors": [
       { "name": "middle", "at": [0.1], "quantities": ["water_level"] },
       { "name": "cell", "at": [0.025], "quantities": ["water_level"] },
-      { "name": "wall", "at": [0.0], "quantities": ["water_level"] } ] }
-  })json");
-  if (dim == 3) {  // two cells deep in z, walls there too
-    j["dimension"] = 3;
-    j["gravity"] = {0, -9.81, 0};
-    j["grid"]["min"] = {0, 0, 0};
-    j["grid"]["max"] = {0.2, 0.5, 0.1};
-    j["bodies"][0]["geometry"]["min"] = {0, 0, 0};
-    j["bodies"][0]["geometry"]["max"] = {0.2, 0.3, 0.1};
-    j["boundaries"].push_back({{"on", "z_min"}, {"fluid", "impermeable"}});
-    j["boundaries"].push_back({{"on", "z_max"}, {"fluid", "impermeable"}});
+      { "name": "wall", "at": [0.0], "quantities": ["water_level"] } ] })json");
+  if (dim == 3) {
     auto& m = j["output"]["monitors"];
     m[0]["at"] = {0.1, 0.05};
     m[1]["at"] = {0.025, 0.025};
@@ -63,47 +47,26 @@ json pond(int dim) {
   return j;
 }
 
-/// monitors.csv: the header's column names and the rows.
-struct Table {
-  std::vector<std::string> names;
-  std::vector<std::vector<double>> rows;
-};
-Table read_monitors(const std::string& run) {
-  Table t;
-  std::ifstream in(run + "/monitors.csv");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    std::stringstream ss(line);
-    std::string cell;
-    std::vector<std::string> cells;
-    while (std::getline(ss, cell, ',')) cells.push_back(cell);
-    if (t.names.empty()) {
-      t.names = cells;
-      continue;
-    }
-    std::vector<double> r;
-    for (const auto& c : cells) r.push_back(std::stod(c));
-    t.rows.push_back(r);
-  }
-  return t;
-}
+/// RUN/monitors.csv (postprocess's reader: the header's names, a column each).
+swmpm::post::Table read_monitors(const std::string& run) { return swmpm::post::read_csv(run + "/monitors.csv"); }
 
 void pond_at_rest_reads_its_depth(int dim) {
   const std::string run = run_scene(pond(dim), "water-level-" + std::to_string(dim) + "d");
-  const Table t = read_monitors(run);
+  const auto t = read_monitors(run);
   ASSERT_EQ(t.names.size(), 4u);
   EXPECT_EQ(t.names[1], "middle.water_level");
-  ASSERT_GE(t.rows.size(), 20u);
+  const auto& time = t.columns[0];
+  ASSERT_GE(time.size(), 20u);
   for (std::size_t c = 1; c < t.names.size(); ++c) {
+    const auto& level = t.columns[c];
     double worst = 0.0;
-    for (const auto& r : t.rows) {
-      ASSERT_TRUE(std::isfinite(r[c])) << t.names[c] << " at t = " << r[0];
-      worst = std::max(worst, std::abs(r[c] - H));
+    for (std::size_t r = 0; r < level.size(); ++r) {
+      ASSERT_TRUE(std::isfinite(level[r])) << t.names[c] << " at t = " << time[r];
+      worst = std::max(worst, std::abs(level[r] - H));
     }
     std::printf("water level %dD %s: t = 0 %.6f m, t = %.2f s %.6f m, max |level - H| %.4f mm\n", dim,
-                t.names[c].c_str(), t.rows.front()[c], t.rows.back()[0], t.rows.back()[c], 1e3 * worst);
-    EXPECT_NEAR(t.rows.front()[c], H, 1e-12) << t.names[c];  // the domains' tops at t = 0
+                t.names[c].c_str(), level.front(), time.back(), level.back(), 1e3 * worst);
+    EXPECT_NEAR(level.front(), H, 1e-12) << t.names[c];  // the domains' tops at t = 0
     EXPECT_LT(worst, tolerance) << t.names[c];
   }
 }
@@ -116,16 +79,14 @@ TEST(WaterLevel, PondAtRestReadsItsDepth3D) { pond_at_rest_reads_its_depth(3); }
 TEST(WaterLevel, DamBreakGaugesReadTheFrames) {
   const json scene = load_json(SWMPM_SOURCE_DIR "/examples/dam-break-double-point/scene.json");
   const std::string run = run_scene(scene, "water-level-dam-break");
-  const Table t = read_monitors(run);
+  const auto t = read_monitors(run);
   const double a = 0.05715, h = scene["grid"]["cell_size"].get<double>();  // m
-  std::size_t col_a = 0, col_2a = 0;
-  for (std::size_t c = 0; c < t.names.size(); ++c) {
-    if (t.names[c] == "gauge_a.water_level") col_a = c;
-    if (t.names[c] == "gauge_2a.water_level") col_2a = c;
-  }
-  ASSERT_TRUE(col_a > 0 && col_2a > 0) << "the example's gauges";
-  EXPECT_NEAR(t.rows.front()[col_a], 2 * a, 1e-12);  // the column's top
-  EXPECT_TRUE(std::isnan(t.rows.front()[col_2a]));   // dry at t = 0
+  ASSERT_TRUE(t.has("gauge_a.water_level") && t.has("gauge_2a.water_level")) << "the example's gauges";
+  const auto& time = t.column("time");
+  const auto& at_a = t.column("gauge_a.water_level");
+  const auto& at_2a = t.column("gauge_2a.water_level");
+  EXPECT_NEAR(at_a.front(), 2 * a, 1e-12);  // the column's top
+  EXPECT_TRUE(std::isnan(at_2a.front()));   // dry at t = 0
   // The half-heights l_p,y: frames do not carry them, the particle file does; one body, one size.
   const auto initial = swmpm::scene::read_vtu(run + "/particles/fluid.vtu");
   const auto& half = initial.get("half_size", "fluid").values;
@@ -142,27 +103,27 @@ TEST(WaterLevel, DamBreakGaugesReadTheFrames) {
   double worst = 0.0;
   for (const auto& e : swmpm::scene::read_pvd(run + "/output/results.pvd")) {
     if (e.group != "fluid") continue;
-    const auto row = std::find_if(t.rows.begin(), t.rows.end(),
-                                  [&](const auto& r) { return std::abs(r[0] - e.time) < 1e-9; });
-    if (row == t.rows.end()) continue;
+    const auto row = std::find_if(time.begin(), time.end(), [&](double tr) { return std::abs(tr - e.time) < 1e-9; });
+    if (row == time.end()) continue;
+    const auto r = static_cast<std::size_t>(row - time.begin());
     const auto f = swmpm::scene::read_vtu(run + "/output/" + e.file);
-    for (const auto& [col, x] : {std::pair{col_a, a}, std::pair{col_2a, 2 * a}}) {
-      const double expected = level(f, x), got = (*row)[col];
+    for (const auto& [gauge, x] : {std::pair{&at_a, a}, std::pair{&at_2a, 2 * a}}) {
+      const double expected = level(f, x), got = (*gauge)[r];
+      const char* name = gauge == &at_a ? "gauge_a" : "gauge_2a";
       if (std::isnan(expected)) {
-        EXPECT_TRUE(std::isnan(got)) << t.names[col] << " at t = " << e.time;
+        EXPECT_TRUE(std::isnan(got)) << name << " at t = " << e.time;
         continue;
       }
-      EXPECT_NEAR(got, expected, 1e-9) << t.names[col] << " at t = " << e.time;
+      EXPECT_NEAR(got, expected, 1e-9) << name << " at t = " << e.time;
       worst = std::max(worst, std::abs(got - expected));
-      wet_2a += col == col_2a;
+      wet_2a += gauge == &at_2a;
     }
     ++compared;
   }
-  const auto& last = t.rows.back();
   std::printf("dam break: %d frames compared, max |gauge - frame| %.2e m, %d wet at 2a; t = %.3f s: level at a %.4f m "
               "(2a = %.4f m at t = 0), at 2a %.4f m\n",
-              compared, worst, wet_2a, last[0], last[col_a], 2 * a, last[col_2a]);
+              compared, worst, wet_2a, time.back(), at_a.back(), 2 * a, at_2a.back());
   EXPECT_GE(compared, 15);
-  EXPECT_GE(wet_2a, 5);                     // the surge has passed 2a
-  EXPECT_LT(last[col_a], 0.5 * 2 * a);      // the column has collapsed
+  EXPECT_GE(wet_2a, 5);                 // the surge has passed 2a
+  EXPECT_LT(at_a.back(), 0.5 * 2 * a);  // the column has collapsed
 }
