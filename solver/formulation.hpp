@@ -11,6 +11,7 @@
 #include <omp.h>
 
 #include <array>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -74,6 +75,9 @@ struct State {
   /// and through add_fluid() n (porosity at the point) and p (pore pressure, compression positive).
   ParticleSet<Dim> fluid;
   SurfaceSamples<Dim> surfaces;  // named-surface samples at t = 0 (empty without named surfaces)
+  /// mpm-fem: the initial phase field preprocess wrote (particles/phase_field.vtu): the grid's
+  /// nodes in flat order (x fastest) with the array `phi` (1 water, 0 air); empty otherwise.
+  scene::PointCloud phase_field;
   double time = 0.0;
   long step = 0;
   Health health;
@@ -87,6 +91,9 @@ struct State {
     for (std::size_t p = 0; p < solid.size(); ++p) index_of_id[solid.id[p]] = static_cast<int>(p);
   }
 };
+
+/// A field of an Eulerian fluid on the grid (mpm-fem) that a monitor reads at a fixed point.
+enum class GridQuantity { pressure, velocity_x, velocity_y, velocity_z, phase };
 
 /// Wall time spent in each named stage of step(), for the log and the benchmarks.
 struct StageTimes {
@@ -168,6 +175,17 @@ class Formulation {
   /// (explicit-double-point: `liquefied` on the solid points, `free_surface` on the liquid points).
   /// Called once per frame, after complete_output_fields; arrays added with the clouds' sizes.
   virtual void add_point_fields(const State<Dim>& /*s*/, scene::PointCloud& /*solid*/, scene::PointCloud& /*fluid*/) const {}
+  /// An Eulerian fluid on the grid (mpm-fem): monitors of the fluid phase read it at their fixed
+  /// point `at` (grid_value) and water_level gauges read the height where phi = 1/2
+  /// (grid_water_level), from the last completed step's nodal values, instead of following water
+  /// points. Both NaN outside the grid (and the level NaN where phi < 1/2 on the whole line).
+  virtual bool fluid_on_grid() const { return false; }
+  virtual double grid_value(const std::array<double, 3>& /*x*/, GridQuantity /*q*/) const {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  /// The highest height y on the vertical line (x, y, z) where phi crosses 1/2 from below
+  /// (scanning down from the grid's top): the water's free surface.
+  virtual double grid_water_level(double /*x*/, double /*z*/) const { return std::numeric_limits<double>::quiet_NaN(); }
 
  protected:
   StageTimes times_;
