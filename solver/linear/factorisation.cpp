@@ -14,7 +14,12 @@ struct Direct<M>::Impl {
 };
 
 template <Method M>
-Direct<M>::Direct() : impl_(std::make_unique<Impl>()) {}
+Direct<M>::Direct() : impl_(std::make_unique<Impl>()) {
+  // UMFPACK refines each solve iteratively by default (up to 2 steps, each a product with A and
+  // a solve): a caller that reuses a factor as a Krylov preconditioner refines already, so the
+  // solve is the plain forward and back substitution.
+  if constexpr (M == Method::lu) impl_->solver.umfpackControl()(UMFPACK_IRSTEP) = 0;
+}
 template <Method M>
 Direct<M>::~Direct() = default;
 

@@ -1,0 +1,121 @@
+// A finite-element system on the grid's nodes with B unknowns per node, assembled cell by cell
+// straight into the values of a fixed CSC pattern (linear/stencil.hpp's StencilPattern over all
+// nodes, every entry stored): no triplets, no sorting, and the factorisation's symbolic analysis
+// is kept for the life of the grid.
+//
+// Where an entry lives: the pattern stores column (J, b) as the rows (I, a) of the stencil slots
+// around J that lie inside the grid, slot by slot (x fastest), unknowns a within a slot. The
+// slots inside the grid form a sub-box [dlo, dhi] of [-R, R]^Dim around J, so entry (I, a) of
+// column (J, b) sits at col_start(J B + b) + rank_J(I - J) B + a, rank_J the offset's index in
+// J's sub-box (x fastest). Cells add their dense local matrices there, colour by colour
+// (cell_basis.hpp), so sums do not depend on the thread count.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "solver/grid/grid.hpp"
+#include "solver/linear/stencil.hpp"
+
+namespace swmpm::fem {
+
+template <int Dim, int R, int B>
+class NodeSystem {
+ public:
+  /// Pattern of the whole grid (every node carries B equations).
+  void build(const Grid<Dim>& g) {
+    nodes_ = g.nodes_per_axis();
+    std::vector<int> eqs(g.num_nodes()), eq_of(g.num_nodes());
+    for (std::size_t i = 0; i < eqs.size(); ++i) eqs[i] = eq_of[i] = static_cast<int>(i);
+    pattern_.build(nodes_, g.all_nodes(), eqs, eq_of, linear::Storage::full, A);
+    rhs.setZero(A.rows());
+    fixed_.assign(A.rows(), 0);
+    fixed_value_.assign(A.rows(), 0.0);
+  }
+
+  std::array<int, Dim> ijk(std::size_t i) const {
+    std::array<int, Dim> c;
+    for (int a = 0; a < Dim; ++a) {
+      c[a] = static_cast<int>(i % static_cast<std::size_t>(nodes_[a]));
+      i /= static_cast<std::size_t>(nodes_[a]);
+    }
+    return c;
+  }
+
+  /// Column (J, b)'s geometry, for position(): J's sub-box of inside offsets.
+  struct Column {
+    std::array<int, Dim> dlo, stride;
+    int start[B];
+  };
+  Column column(std::size_t J) const {
+    Column c;
+    const auto q = ijk(J);
+    int stride = 1;
+    for (int a = 0; a < Dim; ++a) {
+      c.dlo[a] = q[a] - R < 0 ? -q[a] : -R;
+      const int dhi = q[a] + R > nodes_[a] - 1 ? nodes_[a] - 1 - q[a] : R;
+      c.stride[a] = stride;
+      stride *= dhi - c.dlo[a] + 1;
+    }
+    for (int b = 0; b < B; ++b) c.start[b] = A.outerIndexPtr()[J * B + b];
+    return c;
+  }
+  /// The value index of A(I a, J b), d = ijk(I) - ijk(J) (inside the grid, |d| <= R).
+  static int position(const Column& c, const std::array<int, Dim>& d, int a, int b) {
+    int rank = 0;
+    for (int ax = 0; ax < Dim; ++ax) rank += (d[ax] - c.dlo[ax]) * c.stride[ax];
+    return c.start[b] + rank * B + a;
+  }
+
+  void clear() {
+    std::fill_n(A.valuePtr(), A.nonZeros(), 0.0);
+    rhs.setZero();
+  }
+
+  /// Unknown r = I B + a is prescribed (value v): its row and column are replaced by the identity
+  /// times `scale`, the column's products with v moved to the right-hand side.
+  void fix(long r, double v) {
+    fixed_[r] = 1;
+    fixed_value_[r] = v;
+  }
+  void unfix_all() { std::fill(fixed_.begin(), fixed_.end(), 0); }
+  bool is_fixed(long r) const { return fixed_[r] != 0; }
+
+  /// Applies the prescribed unknowns to the assembled A and rhs (after assembly, before the solve).
+  void apply_fixed(double scale) {
+    const int n = static_cast<int>(A.cols());
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    double* val = A.valuePtr();
+    // Columns: move the known values to the right-hand side, then zero them.
+    for (int col = 0; col < n; ++col) {
+      if (!fixed_[col]) continue;
+      const double v = fixed_value_[col];
+      for (int e = outer[col]; e < outer[col + 1]; ++e) {
+        if (v != 0.0 && !fixed_[inner[e]]) rhs[inner[e]] -= val[e] * v;
+        val[e] = inner[e] == col ? scale : 0.0;
+      }
+    }
+    // Rows of fixed unknowns in free columns.
+    for (int col = 0; col < n; ++col) {
+      if (fixed_[col]) continue;
+      for (int e = outer[col]; e < outer[col + 1]; ++e)
+        if (fixed_[inner[e]]) val[e] = 0.0;
+    }
+    for (int r = 0; r < n; ++r)
+      if (fixed_[r]) rhs[r] = scale * fixed_value_[r];
+  }
+
+  linear::CscMatrix A;
+  Eigen::VectorXd rhs;
+
+ private:
+  std::array<int, Dim> nodes_{};
+  linear::StencilPattern<Dim, R, B> pattern_;
+  std::vector<std::uint8_t> fixed_;
+  std::vector<double> fixed_value_;
+};
+
+}  // namespace swmpm::fem

@@ -1,0 +1,352 @@
+// The pore and free fluid of mpm-fem (seed 004, Pan, Yamaguchi, Moriguchi & Terada): Eulerian
+// velocity v (the fluid's own, "true" velocity) and pressure p on the grid's B-spline basis, the
+// same basis the MPM soil uses, solved together each step by a stabilised finite-element method
+// (SUPG / PSPG, Tezduyar 1991, plus the seed's shock-capturing term). docs/formulations.md,
+// "mpm-fem", derives every term; the numbers below are the seed's equations.
+//
+// Strong form on the whole grid (water, air, and the pores of the soil), n the porosity (1 where
+// no soil), rho and mu the fluid's blended by the phase field phi (eqs. 89-90):
+//   n rho (dv/dt + v.grad v - b) = -n grad p - P^ + div(n mu grad v)       (eq. 9; the viscous
+//                                                                           term is ours, below)
+//   div((1 - n) v_s + n v) = 0                                             (eq. 14)
+//   P^ = theta n^2 (mu / k + 1.75 rho |v - v_s| / (sqrt(150 k) n^(3/2))) (v - v_s)   (eq. 3)
+// theta the soil's volume fraction at the node (eq. 79: the drag only where soil is), k the
+// intrinsic permeability (Kozeny–Carman, eq. 4), v_s the soil's velocity.
+//
+// Weak form (eq. 20 with the stabilisation of eq. 25), test functions w (momentum) and q
+// (continuity), summed over cells e:
+//   int w . n rho (dv/dt + vbar.grad v - b) + int w . P^ - int div(n w) p + int n mu grad w : grad v
+//   + int q div((1 - n) v_s + n v)
+//   + sum_e int tau_m (vbar.grad w + grad q / rho) . [n rho (dv/dt + vbar.grad v - b) + P^ + n grad p]
+//   + sum_e int tau_c rho div w div((1 - n) v_s + n v)  = 0
+// with (eqs. 26-29) tau_m = [(2/dt)^2 + (2|vbar|/h)^2 + (4 nu / h^2)^2]^(-1/2),
+// tau_c = (h/2) |vbar| xi(Re), Re = |vbar| h / (2 nu), xi = Re/3 (Re <= 3) else 1.
+//
+// In time (eqs. 58-66): dv/dt = (v^{L+1} - v^L)/dt; v^{L+1/2} = (v^{L+1} + v^L)/2 in the
+// momentum balance's advection, viscous and shock-capturing terms; p^{L+1}; v^{L+1} in the
+// continuity (theta = 1); v_s^L; P^ at L (explicit drag); vbar = 3/2 v^L - 1/2 v^{L-1}
+// (Adams–Bashforth). The system (eqs. 67-68) is linear in (v^{L+1}, p^{L+1}): assembled into a
+// fixed pattern (assembly.hpp) and solved by UMFPACK (linear/factorisation.hpp).
+//
+// Beyond the seed: the viscous term int n mu grad w : grad v (Laplacian form, theta = 1/2). The
+// seed's weak form has none (mu enters only the drag and tau); water's 1e-3 Pa s does not change
+// the examples' results, and it keeps the air's momentum from being purely inviscid.
+#pragma once
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/IterativeLinearSolvers>
+
+#include "solver/common.hpp"
+#include "solver/fem/assembly.hpp"
+#include "solver/fem/cell_basis.hpp"
+#include "solver/grid/grid.hpp"
+#include "solver/linear/factorisation.hpp"
+
+namespace swmpm::fem {
+
+/// Water (phi = 1) and air (phi = 0), and the drag law's constants (seed eq. 3).
+struct FluidProperties {
+  double rho_w = 1000.0, mu_w = 1.0e-3;  // kg/m^3, Pa s
+  double rho_a = 1.2, mu_a = 1.8e-5;     // kg/m^3, Pa s
+  double kozeny = 150.0;                 // A of k = D^2 n^3 / (A (1 - n)^2)
+  double forchheimer = 1.75;             // B of the quadratic drag term
+};
+
+/// The soil as the fluid sees it, per node (seed §"Mapping of state variables at node"): porosity
+/// n (eq. 81, 1 where no soil), solid volume fraction theta (eq. 79), intrinsic permeability k [m^2]
+/// (eq. 78; 0 where no soil), and the soil's velocity v_s [m/s] (eq. 77).
+template <int Dim>
+struct SoilOnGrid {
+  std::vector<double> n, theta, k;
+  std::vector<Vec<Dim>> vs;
+  void resize(std::size_t nodes) {
+    n.assign(nodes, 1.0);
+    theta.assign(nodes, 0.0);
+    k.assign(nodes, 0.0);
+    vs.assign(nodes, Vec<Dim>::Zero());
+  }
+};
+
+/// What the fields are at one Gauss point.
+template <int Dim>
+struct FluidPoint {
+  double n, theta, k, phi, rho, mu;
+  Vec<Dim> grad_n, vbar, v, vs;
+  MatD<Dim> grad_v;  // (grad v)_ij = d v_i / d x_j, of v^L
+  double div_vs;
+};
+
+/// The drag coefficient c of P^ = c (v - v_s) (seed eq. 3 with theta): [kg/(m^3 s)].
+inline double drag_coefficient(double theta, double n, double k, double mu, double rho, double rel_speed,
+                               const FluidProperties& pr) {
+  if (!(theta > 0.0) || !(k > 0.0)) return 0.0;
+  return theta * n * n * (mu / k + pr.forchheimer * rho * rel_speed / (std::sqrt(pr.kozeny * k) * std::pow(n, 1.5)));
+}
+
+template <int Dim, class Shape>
+class Fluid {
+ public:
+  static constexpr int B = Dim + 1;  // unknowns per node: v (Dim), p
+  static constexpr int R = Shape::support - 1;
+  using Basis = CellBasis<Dim, Shape>;
+  static constexpr int K = Basis::K, G = Basis::G;
+  using System = NodeSystem<Dim, R, B>;
+
+  /// Per node: bit a set = velocity component a prescribed to 0 (a wall); bit Dim = pressure
+  /// prescribed (value in p_value).
+  struct Conditions {
+    std::vector<std::uint8_t> fixed;
+    std::vector<double> p_value;
+  };
+
+  void setup(const Grid<Dim>& g, const FluidProperties& props, Conditions bcs) {
+    grid_ = &g;
+    props_ = props;
+    bcs_ = std::move(bcs);
+    basis_.build(g);
+    sys_.build(g);
+    const std::size_t nn = g.num_nodes();
+    v.assign(nn, Vec<Dim>::Zero());
+    v_old.assign(nn, Vec<Dim>::Zero());
+    p.assign(nn, 0.0);
+    phi.assign(nn, 1.0);
+    for (std::size_t i = 0; i < nn; ++i)
+      for (int a = 0; a <= Dim; ++a)
+        if (bcs_.fixed[i] >> a & 1) sys_.fix(static_cast<long>(i) * B + a, a == Dim ? bcs_.p_value[i] : 0.0);
+    lu_.analyse(sys_.A);
+    x_.setZero(sys_.A.rows());
+  }
+
+  /// One step (the seed's algorithm step iii, eqs. 67-68): v^{L+1}, p^{L+1} from v^L, v^{L-1},
+  /// the soil's fields at L and the body force b [m/s^2]. False when the factorisation or the
+  /// solve failed (a singular system).
+  bool step(const SoilOnGrid<Dim>& soil, const Vec<Dim>& b, double dt) {
+    assemble(soil, b, dt);
+    if (!solve()) return false;
+    const std::size_t nn = v.size();
+    for (std::size_t i = 0; i < nn; ++i) {
+      v_old[i] = v[i];
+      for (int a = 0; a < Dim; ++a) v[i][a] = x_[static_cast<long>(i) * B + a];
+      p[i] = x_[static_cast<long>(i) * B + Dim];
+    }
+    return true;
+  }
+
+  /// Solve statistics (run.json counters, bench/).
+  long factorisations() const { return lu_.factorisations(); }
+  long krylov_iterations = 0, solves = 0;
+
+  /// The fields at Gauss point gp of cell `c` (v^L, vbar of v^L and v^{L-1}).
+  void fields_at(const typename Basis::Cell& c, int gp, const SoilOnGrid<Dim>& soil, FluidPoint<Dim>& f) const {
+    f.n = f.theta = f.k = f.phi = f.div_vs = 0.0;
+    f.grad_n.setZero();
+    f.vbar.setZero();
+    f.v.setZero();
+    f.vs.setZero();
+    f.grad_v.setZero();
+    for (int k = 0; k < K; ++k) {
+      const std::size_t i = c.node[k];
+      const double N = c.N[gp][k];
+      const Vec<Dim>& dN = c.dN[gp][k];
+      f.n += N * soil.n[i];
+      f.grad_n += soil.n[i] * dN;
+      f.theta += N * soil.theta[i];
+      f.k += N * soil.k[i];
+      f.phi += N * phi[i];
+      f.vbar += N * (1.5 * v[i] - 0.5 * v_old[i]);
+      f.v += N * v[i];
+      f.grad_v.noalias() += v[i] * dN.transpose();
+      f.vs += N * soil.vs[i];
+      f.div_vs += soil.vs[i].dot(dN);
+    }
+    const double ph = std::clamp(f.phi, 0.0, 1.0);
+    f.rho = props_.rho_w * ph + props_.rho_a * (1.0 - ph);  // eq. 89
+    f.mu = props_.mu_w * ph + props_.mu_a * (1.0 - ph);     // eq. 90
+    f.theta = std::clamp(f.theta, 0.0, 1.0);
+  }
+
+  const Grid<Dim>& grid() const { return *grid_; }
+  const Basis& basis() const { return basis_; }
+  const FluidProperties& properties() const { return props_; }
+  const Conditions& conditions() const { return bcs_; }
+
+  std::vector<Vec<Dim>> v, v_old;  // m/s, nodal v^L and v^{L-1} (after step: v^{L+1}, v^L)
+  std::vector<double> p;           // Pa, nodal pressure (compression positive)
+  std::vector<double> phi;         // the phase field's nodal values (PhaseField keeps them current)
+  /// PSPG on the pressure's increment (true) or on the seed's full momentum residual (false).
+  bool pressure_increment = true;
+  double seconds_assemble = 0.0, seconds_factorise = 0.0, seconds_solve = 0.0;
+
+ private:
+  void assemble(const SoilOnGrid<Dim>& soil, const Vec<Dim>& b, double dt) {
+    const double t0 = omp_get_wtime();
+    sys_.clear();
+    const double h = grid_->h();
+    std::array<int, Dim> cells;
+    for (int a = 0; a < Dim; ++a) cells[a] = grid_->axis(a).cells;
+    const int threads = omp_get_max_threads();
+    if (static_cast<int>(local_.size()) < threads) local_.resize(threads);
+    double* val = sys_.A.valuePtr();
+    double* rhs = sys_.rhs.data();
+    for_each_cell_coloured<Dim, Shape::support>(cells, [&](const std::array<int, Dim>& cell) {
+      Local& L = local_[omp_get_thread_num()];
+      basis_.eval(cell, L.c);
+      std::fill(&L.Ae[0][0], &L.Ae[0][0] + (K * B) * (K * B), 0.0);
+      std::fill(L.fe, L.fe + K * B, 0.0);
+      FluidPoint<Dim> f;
+      for (int gp = 0; gp < G; ++gp) {
+        fields_at(L.c, gp, soil, f);
+        const double w = L.c.JxW[gp];
+        const double nu = f.mu / f.rho, speed = f.vbar.norm();
+        const double tau = 1.0 / std::sqrt(4.0 / (dt * dt) + 4.0 * speed * speed / (h * h) +
+                                           16.0 * nu * nu / (h * h * h * h));  // eq. 26
+        const double Re = speed * h / (2.0 * nu);                                // eq. 28
+        const double tau_c = 0.5 * h * speed * (Re <= 3.0 ? Re / 3.0 : 1.0);     // eqs. 27, 29
+        const double W = f.n * f.rho;
+        const Vec<Dim> rel = f.v - f.vs;
+        const double cd = drag_coefficient(f.theta, f.n, f.k, f.mu, f.rho, rel.norm(), props_);
+        // The residual's explicit part r = n rho (v^L/dt - 1/2 vbar.grad v^L + b) - P^(L).
+        const Vec<Dim> r = W * (f.v / dt - 0.5 * f.grad_v * f.vbar + b) - cd * rel;
+        // PSPG's explicit part: the seed's full residual (r), or the pressure increment's
+        // (pressure_increment: n grad p^L in place of n rho b, see the class comment).
+        Vec<Dim> grad_p = Vec<Dim>::Zero();
+        if (pressure_increment)
+          for (int k = 0; k < K; ++k) grad_p += p[L.c.node[k]] * L.c.dN[gp][k];
+        const Vec<Dim> r_pspg = pressure_increment ? Vec<Dim>(r - W * b + f.n * grad_p) : r;
+        const double div_nv = f.n * f.grad_v.trace() + f.grad_n.dot(f.v);     // div(n v^L)
+        const double div_svs = (1.0 - f.n) * f.div_vs - f.grad_n.dot(f.vs);  // div((1 - n) v_s)
+        double ugN[K], T[K];
+        for (int k = 0; k < K; ++k) {
+          ugN[k] = f.vbar.dot(L.c.dN[gp][k]);
+          T[k] = W * (L.c.N[gp][k] / dt + 0.5 * ugN[k]);  // n rho (d/dt + 1/2 vbar.grad) of N_k
+        }
+        for (int ka = 0; ka < K; ++ka) {
+          const double Na = L.c.N[gp][ka];
+          const Vec<Dim>& dNa = L.c.dN[gp][ka];
+          const double wa = Na + tau * ugN[ka];  // Galerkin + SUPG weight
+          const Vec<Dim> pa = (tau / f.rho) * dNa;  // PSPG weight
+          const int ra = ka * B;
+          for (int kb = 0; kb < K; ++kb) {
+            const double Nb = L.c.N[gp][kb];
+            const Vec<Dim>& dNb = L.c.dN[gp][kb];
+            const int cb = kb * B;
+            const double visc = 0.5 * f.mu * f.n * dNa.dot(dNb);
+            const double diag = w * (wa * T[kb] + visc);
+            for (int i = 0; i < Dim; ++i) {
+              L.Ae[ra + i][cb + i] += diag;
+              // shock capturing (LSIC): 1/2 tau_c rho d_i N_a div(n N_b e_j)
+              const double sc = w * 0.5 * tau_c * f.rho * dNa[i];
+              for (int j = 0; j < Dim; ++j) L.Ae[ra + i][cb + j] += sc * (f.n * dNb[j] + f.grad_n[j] * Nb);
+              // pressure: -div(n N_a e_i) N_b + SUPG tau vbar.grad N_a n d_i N_b
+              L.Ae[ra + i][cb + Dim] += w * (-(f.n * dNa[i] + Na * f.grad_n[i]) * Nb + tau * ugN[ka] * f.n * dNb[i]);
+              // continuity: N_a div(n N_b e_i) + PSPG (tau / rho) d_i N_a T_b
+              L.Ae[ra + Dim][cb + i] += w * (Na * (f.n * dNb[i] + f.grad_n[i] * Nb) + pa[i] * T[kb]);
+            }
+            L.Ae[ra + Dim][cb + Dim] += w * f.n * pa.dot(dNb);  // PSPG (tau / rho) n grad N_a . grad N_b
+          }
+          for (int i = 0; i < Dim; ++i)
+            L.fe[ra + i] += w * (wa * r[i] - 0.5 * f.mu * f.n * f.grad_v.row(i).dot(dNa) -
+                                 tau_c * f.rho * dNa[i] * (0.5 * div_nv + div_svs));
+          L.fe[ra + Dim] += w * (-Na * div_svs + pa.dot(r_pspg));
+        }
+      }
+      // Scatter into the CSC values and the right-hand side (this colour's cells share no node).
+      std::array<int, Dim> s_of[K];
+      for (int k = 0; k < K; ++k) {
+        int rr = k;
+        for (int a = 0; a < Dim; ++a) {
+          s_of[k][a] = rr % Shape::support;
+          rr /= Shape::support;
+        }
+      }
+      for (int kb = 0; kb < K; ++kb) {
+        const auto col = sys_.column(L.c.node[kb]);
+        for (int ka = 0; ka < K; ++ka) {
+          std::array<int, Dim> d;
+          for (int a = 0; a < Dim; ++a) d[a] = s_of[ka][a] - s_of[kb][a];
+          for (int bb = 0; bb < B; ++bb) {
+            const int pos0 = System::position(col, d, 0, bb);
+            for (int aa = 0; aa < B; ++aa) val[pos0 + aa] += L.Ae[ka * B + aa][kb * B + bb];
+          }
+        }
+      }
+      for (int ka = 0; ka < K; ++ka)
+        for (int aa = 0; aa < B; ++aa) rhs[static_cast<long>(L.c.node[ka]) * B + aa] += L.fe[ka * B + aa];
+    });
+    sys_.apply_fixed(1.0);
+    seconds_assemble += omp_get_wtime() - t0;
+  }
+
+  /// The last LU factor as the preconditioner of BiCGSTAB (Eigen's preconditioner interface):
+  /// the matrix changes little from step to step (phi, the advection velocity, the soil), so an
+  /// old factor solves the new system in a few iterations; the system is factorised afresh when
+  /// that takes more than kMaxReuseIterations (or fails), and on the first step.
+  struct FactorPreconditioner {
+    const linear::LU* lu = nullptr;
+    template <class M>
+    FactorPreconditioner& analyzePattern(const M&) { return *this; }
+    template <class M>
+    FactorPreconditioner& factorize(const M&) { return *this; }
+    template <class M>
+    FactorPreconditioner& compute(const M&) { return *this; }
+    template <class Rhs>
+    Eigen::VectorXd solve(const Rhs& r) const {
+      const Eigen::VectorXd rr = r;
+      Eigen::VectorXd z;
+      lu->solve(rr, z);
+      return z;
+    }
+    Eigen::ComputationInfo info() const { return Eigen::Success; }
+  };
+  static constexpr int kMaxReuseIterations = 10;
+  static constexpr double kTolerance = 1e-10;  // relative residual of the Krylov solve
+
+  bool solve() {
+    ++solves;
+    double t0 = omp_get_wtime();
+    if (lu_.factorisations() > 0) {
+      Eigen::BiCGSTAB<linear::CscMatrix, FactorPreconditioner> krylov;
+      krylov.preconditioner().lu = &lu_;
+      krylov.setTolerance(kTolerance);
+      krylov.setMaxIterations(kMaxReuseIterations);
+      krylov.compute(sys_.A);
+      Eigen::VectorXd x = krylov.solveWithGuess(sys_.rhs, x_);
+      krylov_iterations += krylov.iterations();
+      seconds_solve += omp_get_wtime() - t0;
+      if (krylov.info() == Eigen::Success && x.allFinite()) {
+        x_ = std::move(x);
+        return true;
+      }
+      t0 = omp_get_wtime();
+    }
+    if (!lu_.factorise(sys_.A)) return false;
+    const double t1 = omp_get_wtime();
+    seconds_factorise += t1 - t0;
+    const bool ok = lu_.solve(sys_.rhs, x_);
+    seconds_solve += omp_get_wtime() - t1;
+    return ok && x_.allFinite();
+  }
+
+  struct Local {
+    typename Basis::Cell c;
+    double Ae[K * B][K * B];
+    double fe[K * B];
+  };
+
+  const Grid<Dim>* grid_ = nullptr;
+  FluidProperties props_;
+  Conditions bcs_;
+  Basis basis_;
+  System sys_;
+  linear::LU lu_;
+  Eigen::VectorXd x_;
+  std::vector<Local> local_;
+};
+
+}  // namespace swmpm::fem

@@ -1,0 +1,209 @@
+// The free surface of mpm-fem: an Allen–Cahn phase field phi (1 water, 0 air; seed 004 App. B,
+// after Jacqmin 1999 and Takada et al. 2016) on the grid's B-spline basis, advected by the fluid's
+// velocity and stabilised by SUPG and the seed's LSIC term:
+//
+//   dphi/dt + v.grad phi = M_phi (a^2 lap phi + 4 W phi (1 - phi)(phi - 1/2))       (eqs. 91-92)
+//
+// weak form (eq. 94), tau_phi = [(2/dt)^2 + (2|v|/h)^2]^(-1/2), tau_LSIC = (h/2)|v| (eqs. 95-96):
+//   int psi (dphi/dt + v.grad phi) + M a^2 int grad psi.grad phi - 4 W M int psi f(phi)
+//   + sum_e int tau_phi v.grad psi (dphi/dt + v.grad phi - 4 W M f(phi))
+//   + sum_e int tau_LSIC grad psi.grad phi = 0,          f(phi) = phi (1 - phi)(phi - 1/2)
+// in time as eq. 106: Crank–Nicolson on the linear terms, f(phi^L) explicit.
+//
+// The planar equilibrium is phi = (1 + tanh(x / delta)) / 2 with delta = a sqrt(2 / W): it rises
+// from 0.05 to 0.95 over 2 atanh(0.9) delta = 2.944 delta, the scene's `interface_width`. Only
+// delta and the relaxation rate M W matter; W = 1 here and a follows from the width. The
+// interface relaxes at the rate M W (1/s): it must outpace the smearing of the advection's
+// LSIC diffusion, (h/2)|v| against M a^2 (docs/formulations.md gives the default's reasoning).
+//
+// Allen–Cahn moves a curved interface at the normal speed M a^2 kappa, which loses water where
+// the surface is convex. The water volume int n phi is restored after each step by a correction
+// concentrated in the interface, phi += lambda 4 phi (1 - phi), lambda making int n phi what it
+// was (a Lagrange multiplier in the spirit of Brassel & Bretin 2011), when `volume_correction`.
+#pragma once
+
+#include <Eigen/IterativeLinearSolvers>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "solver/common.hpp"
+#include "solver/fem/assembly.hpp"
+#include "solver/fem/cell_basis.hpp"
+#include "solver/grid/grid.hpp"
+
+namespace swmpm::fem {
+
+struct PhaseFieldParameters {
+  double width = 0.0;     // m, the 5 %-95 % interface width (2.944 delta)
+  double mobility = 0.0;  // M_phi, with W = 1: the relaxation rate (1/s)
+  bool volume_correction = true;
+  double delta() const { return width / (2.0 * std::atanh(0.9)); }
+  double a2() const { return 0.5 * delta() * delta(); }  // a^2 = delta^2 W / 2, W = 1
+};
+
+template <int Dim, class Shape>
+class PhaseField {
+ public:
+  static constexpr int R = Shape::support - 1;
+  using Basis = CellBasis<Dim, Shape>;
+  static constexpr int K = Basis::K, G = Basis::G;
+  using System = NodeSystem<Dim, R, 1>;
+
+  void setup(const Grid<Dim>& g, const Basis& basis, const PhaseFieldParameters& prm) {
+    grid_ = &g;
+    basis_ = &basis;
+    prm_ = prm;
+    sys_.build(g);
+    x_.setZero(sys_.A.rows());
+  }
+
+  /// phi^{L+1} from phi^L (in place) with the fluid's nodal velocity v and the nodal porosity n
+  /// (the volume correction's weight). Returns the BiCGSTAB iterations (-1: no convergence).
+  int step(std::vector<double>& phi, const std::vector<Vec<Dim>>& v, const std::vector<double>& n, double dt) {
+    const double V0 = volume(phi, n);
+    assemble(phi, v, dt);
+    Eigen::BiCGSTAB<linear::CscMatrix, Eigen::DiagonalPreconditioner<double>> solver;
+    solver.setTolerance(1e-10);
+    solver.setMaxIterations(500);
+    solver.compute(sys_.A);
+    x_ = solver.solveWithGuess(sys_.rhs, Eigen::Map<const Eigen::VectorXd>(phi.data(), static_cast<long>(phi.size())));
+    if (solver.info() != Eigen::Success) return -1;
+    for (std::size_t i = 0; i < phi.size(); ++i) phi[i] = x_[static_cast<long>(i)];
+    if (prm_.volume_correction) correct_volume(phi, n, V0);
+    return static_cast<int>(solver.iterations());
+  }
+
+  /// int n phi dOmega (m^Dim): the water's volume (n = 1 outside soil).
+  double volume(const std::vector<double>& phi, const std::vector<double>& n) const {
+    double V = 0.0;
+    for_each_cell_serial([&](const typename Basis::Cell& c) {
+      for (int gp = 0; gp < G; ++gp) {
+        double ph = 0.0, nn = 0.0;
+        for (int k = 0; k < K; ++k) {
+          ph += c.N[gp][k] * phi[c.node[k]];
+          nn += c.N[gp][k] * n[c.node[k]];
+        }
+        V += c.JxW[gp] * nn * ph;
+      }
+    });
+    return V;
+  }
+
+  double last_correction = 0.0;  // the last step's lambda
+
+ private:
+  template <class Fn>
+  void for_each_cell_serial(Fn&& fn) const {
+    typename Basis::Cell c;
+    std::array<int, Dim> cell{};
+    const NodeBox<Dim> all = cells_box();
+    grid_->for_each_node(all, [&](std::size_t, const std::array<int, Dim>& ijk) {
+      cell = ijk;
+      basis_->eval(cell, c);
+      fn(c);
+    });
+  }
+  NodeBox<Dim> cells_box() const {
+    NodeBox<Dim> b;
+    for (int a = 0; a < Dim; ++a) {
+      b.lo[a] = 0;
+      b.hi[a] = grid_->axis(a).cells - 1;
+    }
+    return b;
+  }
+
+  /// phi += lambda 4 phi (1 - phi) at the nodes, lambda from int n phi = V0 to first order.
+  void correct_volume(std::vector<double>& phi, const std::vector<double>& n, double V0) {
+    std::vector<double>& g = weight_;
+    g.resize(phi.size());
+    for (std::size_t i = 0; i < phi.size(); ++i) {
+      const double p = std::clamp(phi[i], 0.0, 1.0);
+      g[i] = 4.0 * p * (1.0 - p);
+    }
+    const double V = volume(phi, n), dV = volume(g, n);
+    if (!(dV > 0.0)) return;
+    last_correction = (V0 - V) / dV;
+    for (std::size_t i = 0; i < phi.size(); ++i) phi[i] += last_correction * g[i];
+  }
+
+  void assemble(const std::vector<double>& phi, const std::vector<Vec<Dim>>& v, double dt) {
+    sys_.clear();
+    const double h = grid_->h(), M = prm_.mobility, Ma2 = M * prm_.a2(), react = 4.0 * M;  // W = 1
+    std::array<int, Dim> cells;
+    for (int a = 0; a < Dim; ++a) cells[a] = grid_->axis(a).cells;
+    const int threads = omp_get_max_threads();
+    if (static_cast<int>(local_.size()) < threads) local_.resize(threads);
+    double* val = sys_.A.valuePtr();
+    double* rhs = sys_.rhs.data();
+    for_each_cell_coloured<Dim, Shape::support>(cells, [&](const std::array<int, Dim>& cell) {
+      Local& L = local_[omp_get_thread_num()];
+      basis_->eval(cell, L.c);
+      std::fill(&L.Ae[0][0], &L.Ae[0][0] + K * K, 0.0);
+      std::fill(L.fe, L.fe + K, 0.0);
+      for (int gp = 0; gp < G; ++gp) {
+        double ph = 0.0;
+        Vec<Dim> u = Vec<Dim>::Zero(), gph = Vec<Dim>::Zero();
+        for (int k = 0; k < K; ++k) {
+          const std::size_t i = L.c.node[k];
+          ph += L.c.N[gp][k] * phi[i];
+          u += L.c.N[gp][k] * v[i];
+          gph += phi[i] * L.c.dN[gp][k];
+        }
+        const double w = L.c.JxW[gp], speed = u.norm();
+        const double tau = 1.0 / std::sqrt(4.0 / (dt * dt) + 4.0 * speed * speed / (h * h));  // eq. 95
+        const double tau_ls = 0.5 * h * speed;                                                // eq. 96
+        const double f = react * ph * (1.0 - ph) * (ph - 0.5);  // 4 W M f(phi^L)
+        double ugN[K];
+        for (int k = 0; k < K; ++k) ugN[k] = u.dot(L.c.dN[gp][k]);
+        const double ugphi = u.dot(gph);
+        for (int ka = 0; ka < K; ++ka) {
+          const double Na = L.c.N[gp][ka], wa = Na + tau * ugN[ka];
+          const Vec<Dim>& dNa = L.c.dN[gp][ka];
+          for (int kb = 0; kb < K; ++kb) {
+            const double Nb = L.c.N[gp][kb];
+            const double diff = (Ma2 + tau_ls) * dNa.dot(L.c.dN[gp][kb]);
+            L.Ae[ka][kb] += w * (wa * (Nb / dt + 0.5 * ugN[kb]) + 0.5 * diff);
+          }
+          // right-hand side: (M + M_s) phi^L / dt - 1/2 (A + A_s + D + S_c) phi^L + P + P_s
+          double ph_a = 0.0;
+          ph_a = wa * (ph / dt - 0.5 * ugphi + f) - 0.5 * (Ma2 + tau_ls) * dNa.dot(gph);
+          L.fe[ka] += w * ph_a;
+        }
+      }
+      std::array<int, Dim> s_of[K];
+      for (int k = 0; k < K; ++k) {
+        int rr = k;
+        for (int a = 0; a < Dim; ++a) {
+          s_of[k][a] = rr % Shape::support;
+          rr /= Shape::support;
+        }
+      }
+      for (int kb = 0; kb < K; ++kb) {
+        const auto col = sys_.column(L.c.node[kb]);
+        for (int ka = 0; ka < K; ++ka) {
+          std::array<int, Dim> d;
+          for (int a = 0; a < Dim; ++a) d[a] = s_of[ka][a] - s_of[kb][a];
+          val[System::position(col, d, 0, 0)] += L.Ae[ka][kb];
+        }
+      }
+      for (int ka = 0; ka < K; ++ka) rhs[L.c.node[ka]] += L.fe[ka];
+    });
+  }
+
+  struct Local {
+    typename Basis::Cell c;
+    double Ae[K][K];
+    double fe[K];
+  };
+
+  const Grid<Dim>* grid_ = nullptr;
+  const Basis* basis_ = nullptr;
+  PhaseFieldParameters prm_;
+  System sys_;
+  Eigen::VectorXd x_;
+  std::vector<Local> local_;
+  std::vector<double> weight_;
+};
+
+}  // namespace swmpm::fem
