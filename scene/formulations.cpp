@@ -35,6 +35,14 @@ void check_semi_implicit(const Scene& s, std::vector<Problem>& problems) {
   }
 }
 
+/// mpm-fem integrates its fluid cell by cell with the grid's B-splines.
+void check_mpm_fem(const Scene& s, std::vector<Problem>& problems) {
+  if (s.grid.shape_function != ShapeFunction::bspline2 && s.grid.shape_function != ShapeFunction::bspline3)
+    problems.push_back({"/grid/shape_function", "got \"" + to_string(s.grid.shape_function) +
+                                                    "\"; mpm-fem solves its water on the grid's B-splines: expected "
+                                                    "\"bspline2\" (the seed's) or \"bspline3\""});
+}
+
 /// The scene field behind a string switch (nullptr for a boolean one).
 std::string* string_field(Scene& s, const std::string& path) {
   if (path == "/solver/stabilisation/pressure") return &s.solver.stabilisation.pressure;
@@ -60,7 +68,8 @@ std::vector<FormulationRow> make_rows() {
                   .coupled = false,
                   .water = {},
                   .switches = {},
-                  .check = nullptr});
+                  .check = nullptr,
+                  .material_keys = {"bulk_modulus"}});  // a fluid material in a dry scene is unused, as written
   rows.push_back({.id = Formulation::explicit_single_point,
                   .name = "explicit-single-point",
                   .paper = "seed 000",
@@ -73,7 +82,8 @@ std::vector<FormulationRow> make_rows() {
                   .switches = {{"/solver/stabilisation/pressure", kExplicitPressures, "mfvp-linear"},
                                {"/solver/stabilisation/strain_smoothing", {"true", "false"}, "true"},
                                {"/solver/continuity", kContinuity, "non-conservative"}},
-                  .check = nullptr});
+                  .check = nullptr,
+                  .material_keys = {"bulk_modulus"}});
   // Semi-implicit: the node-wise projection with a linear basis (seed 001's eq. 77 is its
   // constant-basis case, which biases free-surface nodes: 3.4 % pressure error and 1e-3 m/s of
   // spurious flow in a hydrostatic layer at rest, where the linear one is exact; docs/verification.md).
@@ -87,7 +97,8 @@ std::vector<FormulationRow> make_rows() {
                   .coupled = true,
                   .water = {.pore_fluid_on_solid = true},
                   .switches = semi_implicit,
-                  .check = check_semi_implicit});
+                  .check = check_semi_implicit,
+                  .material_keys = {"bulk_modulus"}});
   std::vector<Switch> double_point = semi_implicit;
   double_point.push_back({"/solver/escaped_water", {"keep", "remove"}, "keep"});
   double_point.push_back({"/initialisation/tie_water", {"true", "false"}, "true"});
@@ -98,7 +109,8 @@ std::vector<FormulationRow> make_rows() {
                   .coupled = true,
                   .water = {.fluid_particles = true},
                   .switches = double_point,
-                  .check = check_semi_implicit});
+                  .check = check_semi_implicit,
+                  .material_keys = {"bulk_modulus"}});
   rows.push_back({.id = Formulation::explicit_double_point,
                   .name = "explicit-double-point",
                   .paper = "seed 003",
@@ -109,15 +121,19 @@ std::vector<FormulationRow> make_rows() {
                                {"/solver/drag", {"darcy", "ergun"}, "ergun"},
                                {"/solver/stabilisation/pressure", {"none", "mfvp-constant", "mfvp-linear"}, "mfvp-linear"}},
                   .check = nullptr,
-                  .material_keys = {"grain_diameter", "ergun_a", "ergun_b", "maximum_porosity", "cavitation_threshold"}});
+                  .material_keys = {"bulk_modulus", "grain_diameter", "ergun_a", "ergun_b", "maximum_porosity", "cavitation_threshold"}});
   rows.push_back({.id = Formulation::mpm_fem,
                   .name = "mpm-fem",
                   .paper = "seed 004",
-                  .implemented = false,
+                  .implemented = true,
                   .coupled = true,
                   .water = {.pore_fluid_on_solid = true, .free_water_on_grid = true},
-                  .switches = {},
-                  .check = nullptr});
+                  // PSPG on the pressure's increment (default) or on the seed's full momentum
+                  // residual, which drives 5e-3 m/s of spurious flow in water at rest
+                  // (docs/formulations.md, "mpm-fem").
+                  .switches = {{"/solver/stabilisation/pressure", {"pspg-increment", "pspg"}, "pspg-increment"}},
+                  .check = check_mpm_fem,
+                  .material_keys = {"grain_diameter", "ergun_a", "ergun_b"}});
   return rows;
 }
 
@@ -194,6 +210,16 @@ std::vector<Problem> check_formulation(const nlohmann::json& raw, const Scene& s
           problems.push_back({path, "got " + m[key].dump() + ", but " + row.name +
                                         " does not read this material key (read by " + join(readers) + "); remove the key"});
         }
+    }
+  // The fluid's bulk modulus: required where a formulation reads it (weakly compressible water).
+  const bool reads_K = std::find(row.material_keys.begin(), row.material_keys.end(), "bulk_modulus") != row.material_keys.end();
+  if (reads_K && raw.contains("materials") && raw["materials"].is_array())
+    for (std::size_t i = 0; i < raw["materials"].size(); ++i) {
+      const nlohmann::json& m = raw["materials"][i];
+      if (m.is_object() && m.value("model", "") == "fluid" && !m.contains("bulk_modulus"))
+        problems.push_back({"/materials/" + std::to_string(i) + "/bulk_modulus",
+                            "missing required key, expected a positive number [Pa] (" + row.name +
+                                " models the water as weakly compressible)"});
     }
   if (row.check) row.check(s, problems);
   return problems;

@@ -244,8 +244,9 @@ const Table& fluid_table() {
       {
           {.name = "density", .required = true, .range = positive, .unit = "kg/m^3",
            .meaning = "Fluid density ρ_w."},
-          {.name = "bulk_modulus", .required = true, .range = positive, .unit = "Pa",
-           .meaning = "Fluid bulk modulus K_w."},
+          {.name = "bulk_modulus", .range = positive, .unit = "Pa",
+           .meaning = "Fluid bulk modulus K_w; required by every coupled formulation but mpm-fem, whose water is "
+                      "incompressible (and which refuses it)."},
           {.name = "dynamic_viscosity", .def = 1.0e-3, .range = positive, .unit = "Pa s",
            .meaning = "Dynamic viscosity μ (turns `intrinsic_permeability` into conductivity; explicit-double-point: "
                       "the Newtonian viscosity of free water and the base of a liquefied mixture's)."},
@@ -622,12 +623,14 @@ const Table& stabilisation_table() {
           {.name = "strain_smoothing", .type = Type::boolean, .def = true,
            .meaning = "Smooth volumetric strain over cells."},
           {.name = "pressure", .type = Type::choice,
-           .values = {"none", "mfvp-constant", "mfvp-linear", "mfvp-quadratic", "node-remap", "cell-constant"},
+           .values = {"none", "mfvp-constant", "mfvp-linear", "mfvp-quadratic", "node-remap", "cell-constant",
+                      "pspg-increment", "pspg"},
            .meaning = "Pore-pressure stabilisation; default by formulation: `mfvp-linear` "
                       "(explicit-single-point, semi-implicit, explicit-double-point: on the liquid points' "
-                      "pressure rate), `none` otherwise. `cell-constant` "
+                      "pressure rate), `pspg-increment` (mpm-fem), `none` otherwise. `cell-constant` "
                       "(explicit-single-point): one pressure per grid cell, its rate the exact transpose of "
-                      "the pressure forces (docs/formulations.md)."},
+                      "the pressure forces. mpm-fem: PSPG on the pressure's increment over the step, or `pspg` on "
+                      "the seed's full momentum residual (docs/formulations.md)."},
           {.name = "fbar", .type = Type::choice, .def = "none", .values = {"none", "standard", "modified"},
            .meaning = "F-bar treatment of volumetric locking (seed 001 §4.4.2, every formulation): `standard` "
                       "scales ΔF by the node-wise average of det ΔF (eqs. 79-80); `modified` also averages the "

@@ -141,6 +141,9 @@ class Fluid {
   /// Solve statistics (run.json counters, bench/).
   long factorisations() const { return lu_.factorisations(); }
   long krylov_iterations = 0, solves = 0;
+  /// The next solve factorises afresh (a checkpoint was taken or restored: a resumed run and the
+  /// run that saved then continue with the same factor).
+  void refactorise() const { refactorise_ = true; }
 
   /// The fields at Gauss point gp of cell `c` (v^L, vbar of v^L and v^{L-1}).
   void fields_at(const typename Basis::Cell& c, int gp, const SoilOnGrid<Dim>& soil, FluidPoint<Dim>& f) const {
@@ -213,12 +216,13 @@ class Fluid {
         const double cd = drag_coefficient(f.theta, f.n, f.k, f.mu, f.rho, rel.norm(), props_);
         // The residual's explicit part r = n rho (v^L/dt - 1/2 vbar.grad v^L + b) - P^(L).
         const Vec<Dim> r = W * (f.v / dt - 0.5 * f.grad_v * f.vbar + b) - cd * rel;
-        // PSPG's explicit part: the seed's full residual (r), or the pressure increment's
-        // (pressure_increment: n grad p^L in place of n rho b, see the class comment).
+        // PSPG's explicit part: the seed's full residual (r), or the increment's over the step
+        // (pressure_increment): the static part at L, n grad p^L - n rho b + P^(L), subtracted,
+        // so r_pspg = n rho (v^L/dt - 1/2 vbar.grad v^L) + n grad p^L (see the class comment).
         Vec<Dim> grad_p = Vec<Dim>::Zero();
         if (pressure_increment)
           for (int k = 0; k < K; ++k) grad_p += p[L.c.node[k]] * L.c.dN[gp][k];
-        const Vec<Dim> r_pspg = pressure_increment ? Vec<Dim>(r - W * b + f.n * grad_p) : r;
+        const Vec<Dim> r_pspg = pressure_increment ? Vec<Dim>(r - W * b + cd * rel + f.n * grad_p) : r;
         const double div_nv = f.n * f.grad_v.trace() + f.grad_n.dot(f.v);     // div(n v^L)
         const double div_svs = (1.0 - f.n) * f.div_vs - f.grad_n.dot(f.vs);  // div((1 - n) v_s)
         double ugN[K], T[K];
@@ -310,7 +314,7 @@ class Fluid {
   bool solve() {
     ++solves;
     double t0 = omp_get_wtime();
-    if (lu_.factorisations() > 0) {
+    if (lu_.factorisations() > 0 && !refactorise_) {
       Eigen::BiCGSTAB<linear::CscMatrix, FactorPreconditioner> krylov;
       krylov.preconditioner().lu = &lu_;
       krylov.setTolerance(kTolerance);
@@ -325,6 +329,7 @@ class Fluid {
       }
       t0 = omp_get_wtime();
     }
+    refactorise_ = false;
     if (!lu_.factorise(sys_.A)) return false;
     const double t1 = omp_get_wtime();
     seconds_factorise += t1 - t0;
@@ -347,6 +352,7 @@ class Fluid {
   linear::LU lu_;
   Eigen::VectorXd x_;
   std::vector<Local> local_;
+  mutable bool refactorise_ = false;
 };
 
 }  // namespace swmpm::fem

@@ -30,6 +30,7 @@ constexpr Factory<Dim> kFactories[] = {
     {scene::Formulation::semi_implicit_single_point, make_semi_implicit_single_point<Dim>},
     {scene::Formulation::semi_implicit_double_point, make_semi_implicit_double_point<Dim>},
     {scene::Formulation::explicit_double_point, make_explicit_double_point<Dim>},
+    {scene::Formulation::mpm_fem, make_mpm_fem<Dim>},
 };
 
 }  // namespace

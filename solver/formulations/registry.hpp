@@ -162,5 +162,7 @@ template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_semi_implicit_double_point(const scene::Scene& s, const State<Dim>& state);
 template <int Dim>
 std::unique_ptr<Formulation<Dim>> make_explicit_double_point(const scene::Scene& s, const State<Dim>& state);
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_mpm_fem(const scene::Scene& s, const State<Dim>& state);
 
 }  // namespace swmpm

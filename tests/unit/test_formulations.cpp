@@ -51,9 +51,10 @@ TEST(FormulationTable, ImplementedRowsAreExactlyThoseWithASolver) {
     EXPECT_FALSE(r.water.pore_fluid_on_solid && r.water.fluid_particles) << r.name;
     EXPECT_EQ(r.coupled, r.id != Formulation::dry) << r.name;
   }
-  EXPECT_EQ(implemented, 5);
+  EXPECT_EQ(implemented, 6);
   EXPECT_EQ(implemented_formulations(),
-            "dry, explicit-single-point, semi-implicit-single-point, semi-implicit-double-point, explicit-double-point");
+            "dry, explicit-single-point, semi-implicit-single-point, semi-implicit-double-point, explicit-double-point, "
+            "mpm-fem");
   EXPECT_THROW(row_of(Formulation::automatic), std::logic_error);
 }
 

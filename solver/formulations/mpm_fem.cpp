@@ -1,0 +1,639 @@
+// Formulation `mpm-fem`: seed 004's hybrid (Pan, Yamaguchi, Moriguchi & Terada): the soil
+// skeleton by MPM on the grid's B-splines (MUSL), the pore and free water (and the air above
+// it) by a stabilised Eulerian finite-element method on the same grid and basis
+// (solver/fem/fluid.hpp), the free surface by an Allen–Cahn phase field (solver/fem/phase_field.hpp).
+// docs/formulations.md, "mpm-fem", derives each line and states the choices.
+//
+// Signs: effective stress sigma' tension positive, pore pressure p compression positive. Units SI;
+// 2D quantities per metre. n the porosity, theta the soil's volume fraction at a node.
+//
+// One step, the seed's §"Numerical algorithm" (i)-(vii):
+//   (0) soil points in scatter order every 10 steps (memory locality only)
+//   (i) soil P2G: M_s (eq. 53), M_s v_s (eq. 77), the effective-stress force and weight (eqs.
+//       54-55), tractions; theta_I = sum N V / Omega_I (eq. 79), n_I = 1 - sum N (1 - n) V /
+//       Omega_I (eq. 81, volume-based), k_I = sum N m k / sum N m (eq. 78), Omega_I = int N_I
+//   (ii) the fluid's n, theta, k at its Gauss points from those nodal values (eq. 51)
+//   (iii) the fluid's v^{L+1}, p^{L+1} (eqs. 67-68, one linear system)
+//   (iv) the phase field phi^{L+1} (eq. 106); rho, mu blended by phi (eqs. 89-90)
+//   (v) the soil's nodal velocity (eq. 69): the fluid's pressure on the skeleton,
+//       int ((1 - n) grad N - N grad n) p (eq. 54), and the drag Q (v_f - v_s), Q_I = int N c
+//       lumped, implicit in the soil's own velocity (the seed: explicit; see below)
+//   (vi) G2P (FLIP/PIC), MUSL remap, F, V, n (eqs. 73-75, n <= 0.99), k (eq. 76), the stress
+//   (vii) the grid is cleared by the next step's P2G
+//
+// The drag on the soil: v_s^{L+1} = (M v_s^L + dt (F + Q v_f^{L+1})) / (M + dt Q) per node. The
+// seed's explicit drag (theta = 0) limits dt to about M / Q, which fine soils make tiny; implicit
+// in the soil's own velocity, it sets no limit and costs nothing.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "solver/fem/fluid.hpp"
+#include "solver/fem/phase_field.hpp"
+#include "solver/formulation.hpp"
+#include "solver/formulations/registry.hpp"
+#include "solver/loads.hpp"
+#include "solver/materials/material.hpp"
+#include "solver/porous/free_surface.hpp"
+#include "solver/porous/permeability.hpp"
+#include "solver/porous/points.hpp"
+#include "solver/transfer/fbar.hpp"
+#include "solver/transfer/transfer.hpp"
+
+namespace swmpm {
+namespace {
+
+/// The porosity of a soil point is capped here (seed §"Time integration": "the upper limit value
+/// of the solid porosity ... set at 0.99").
+constexpr double kMaxPointPorosity = 0.99;
+/// The nodal porosity is kept above this (points clustering in a support can give theta_I > 1).
+constexpr double kMinNodalPorosity = 0.01;
+
+/// The soil's nodal sums of (i).
+struct SoilSums {
+  double V = 0.0;   // m^3: sum N V
+  double Vs = 0.0;  // m^3: sum N (1 - n) V, the grains' volume
+  double mk = 0.0;  // kg m^2: sum N m k (k the intrinsic permeability)
+};
+
+template <int Dim, class Shape>
+class MpmFem final : public Formulation<Dim> {
+  static constexpr int S = Shape::support;
+  static constexpr long reorder_interval = 10;  // steps
+  using Basis = fem::CellBasis<Dim, Shape>;
+
+ public:
+  MpmFem(const scene::Scene& s, const State<Dim>& state)
+      : grid_(make_grid<Dim>(s, Shape::degree, Shape::bspline)),
+        bcs_solid_(s, grid_, state.surfaces),
+        loads_(s, grid_, state.solid, state.surfaces, /*pore_pressure_forces=*/false),
+        flip_(s.solver.flip),
+        damping_(s.solver.damping),
+        scene_damping_(s.solver.damping),
+        materials_(make_materials<Dim>(s)),
+        material_particles_(group_by_material(state.solid, s.materials.size())),
+        fbar_(s, grid_) {
+    if constexpr (!Shape::bspline)
+      throw std::runtime_error("mpm-fem needs grid.shape_function \"bspline2\" or \"bspline3\"");
+    // Water: the scene's first fluid material.
+    fem::FluidProperties props;
+    int water = -1;
+    for (std::size_t k = 0; k < s.materials.size(); ++k)
+      if (s.materials[k].model == scene::MaterialModel::fluid) {
+        water = static_cast<int>(k);
+        break;
+      }
+    if (water < 0) throw std::runtime_error("mpm-fem needs a fluid material (the water)");
+    const auto& wm = s.materials[water];
+    props.rho_w = wm.at("density");
+    props.mu_w = wm.has("dynamic_viscosity") ? wm.at("dynamic_viscosity") : 1e-3;
+    props.rho_a = kAirDensity;
+    props.mu_a = kAirViscosity;
+    // The skeletons' permeability (hydraulic conductivity k_h [m/s]; intrinsic k = k_h mu / (rho g)).
+    perm_.resize(s.materials.size());
+    to_intrinsic_ = props.mu_w / (props.rho_w * porous::g_earth);
+    for (std::size_t k = 0; k < s.materials.size(); ++k) {
+      const auto& m = s.materials[k];
+      if (m.model == scene::MaterialModel::fluid || material_particles_[k].empty()) continue;
+      if (m.has("hydraulic_conductivity") || m.has("intrinsic_permeability") || m.has("grain_diameter"))
+        perm_[k] = porous::permeability_of(m, wm);
+      else
+        throw std::runtime_error("material \"" + m.name + "\": mpm-fem needs the permeability of every soil "
+                                 "(hydraulic_conductivity, intrinsic_permeability or grain_diameter)");
+      if (m.has("ergun_a")) props.kozeny = m.at("ergun_a");
+      if (m.has("ergun_b")) props.forchheimer = m.at("ergun_b");
+    }
+    fluid_.setup(grid_, props, fluid_conditions(s));
+    fluid_.pressure_increment = s.solver.stabilisation.pressure != "pspg";
+    // The phase field: preprocess's nodal phi (particles/phase_field.vtu).
+    if (state.phase_field.points.size() == grid_.num_nodes()) {
+      const auto* phi = state.phase_field.find("phi");
+      if (!phi) throw std::runtime_error("particles/phase_field.vtu has no array \"phi\"");
+      for (std::size_t i = 0; i < grid_.num_nodes(); ++i) fluid_.phi[i] = phi->values[i];
+    } else if (!state.phase_field.points.empty()) {
+      throw std::runtime_error("particles/phase_field.vtu holds " + std::to_string(state.phase_field.points.size()) +
+                               " nodes, the grid " + std::to_string(grid_.num_nodes()) + ": run swmpm preprocess again");
+    }
+    fem::PhaseFieldParameters pf;
+    pf.width = kDefaultWidthCells * grid_.h();
+    pf.mobility = kDefaultMobility;
+    pf.volume_correction = true;
+    phase_.setup(grid_, fluid_.basis(), pf);
+    const std::size_t nodes = grid_.num_nodes();
+    solid_.resize(nodes);
+    sums_.assign(nodes, SoilSums{});
+    soil_.resize(nodes);
+    soil_force_.assign(nodes, Vec<Dim>::Zero());
+    drag_.assign(nodes, 0.0);
+    support_.resize(nodes);
+    for (std::size_t i = 0; i < nodes; ++i) support_[i] = porous::basis_integral<Shape>(grid_, i);
+    initial_hydrostatic_pressure(s);
+  }
+
+  std::string name() const override { return "mpm-fem"; }
+
+  void step(State<Dim>& st, const StepContext& ctx) override {
+    ParticleSet<Dim>& ps = st.solid;
+    const double dt = ctx.dt;
+    Vec<Dim> b;
+    for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
+    StageClock lap(this->times_);
+
+    if (ps.size() > 0 && reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval))
+      lap("reorder");                                                                          // (0)
+    soil_to_grid(st, ctx, b);                                                                  // (i)-(ii)
+    if (water_volume0_ < 0.0) water_volume0_ = phase_.volume(fluid_.phi, soil_.n);  // int n phi at t = 0
+    lap("soil p2g");
+
+    const double a0 = fluid_.seconds_assemble, f0 = fluid_.seconds_factorise, s0 = fluid_.seconds_solve;
+    if (!fluid_.step(soil_, b, dt)) {                                                          // (iii)
+      st.health.report_node(0, {0, 0, 0}, "fluid", "the fluid's system could not be solved (singular)");
+      return;
+    }
+    this->times_.add("fluid assembly", fluid_.seconds_assemble - a0);
+    this->times_.add("fluid factorisation", fluid_.seconds_factorise - f0);
+    this->times_.add("fluid solve", fluid_.seconds_solve - s0);
+    lap.restart();
+    check_fluid(st);
+    if (phase_.step(fluid_.phi, fluid_.v, soil_.n, dt) < 0)                                    // (iv)
+      st.health.report_node(0, {0, 0, 0}, "fluid", "the phase field's solve did not converge");
+    lap("phase field");
+
+    if (ps.size() == 0) return;
+    fluid_on_soil(dt);                                                                         // (v)
+    update_soil_grid(dt);
+    lap("soil grid update");
+    transfer::gather_velocity_position_remap(grid_, schedule_, box_, sd_, dt, flip_, ps, solid_);  // (vi)
+    bcs_solid_.apply(grid_, box_, solid_.v, false);
+    lap("g2p + musl remap");
+    const long bad = update_soil(st, dt);
+    if (bad >= 0) st.health.report(bad, "solid", "volume ratio J <= 0 or porosity outside (0, 1)");
+    lap("stress and porosity");
+  }
+
+  double critical_time_step(const State<Dim>& st, std::string& reason) const override {
+    // The soil's P-wave CFL on its partial density (the water is incompressible: no storage term),
+    // and the fluid's advective CFL h / |v_f|max (the Adams–Bashforth advection velocity is explicit).
+    const ParticleSet<Dim>& ps = st.solid;
+    double c2 = 0.0;
+    for (std::size_t k = 0; k < materials_.size(); ++k) {
+      if (material_particles_[k].empty() || !materials_[k]) continue;
+      const double M = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
+      for (int p : material_particles_[k]) c2 = std::max(c2, M * ps.V[p] / ps.m[p]);
+    }
+    double v2 = 0.0, vf2 = 0.0;
+    for (std::size_t p = 0; p < ps.size(); ++p) v2 = std::max(v2, ps.v[p].squaredNorm());
+    for (const auto& v : fluid_.v) vf2 = std::max(vf2, v.squaredNorm());
+    const double h = grid_.h(), c = std::sqrt(c2), vs = std::sqrt(v2), vf = std::sqrt(vf2);
+    const double dt_soil = c > 0.0 ? h / (c + vs) : std::numeric_limits<double>::infinity();
+    const double dt_fluid = vf > 0.0 ? h / vf : std::numeric_limits<double>::infinity();
+    std::ostringstream os;
+    if (dt_soil <= dt_fluid) os << "soil P-wave CFL (c = " << c << " m/s, |v_s|max = " << vs << " m/s)";
+    else os << "fluid advective CFL (|v_f|max = " << vf << " m/s)";
+    os << "; the water is incompressible and the drag implicit for the soil";
+    reason = os.str();
+    const double dt = std::min(dt_soil, dt_fluid);
+    return std::isfinite(dt) ? dt : kMaxStep;
+  }
+
+  double kinetic_energy(const State<Dim>& st) const override {
+    const auto& ps = st.solid;
+    return fixed_order_sum(ps.size(), [&](std::size_t p) { return 0.5 * ps.m[p] * ps.v[p].squaredNorm(); }) +
+           fluid_integral([&](const fem::FluidPoint<Dim>& f) { return 0.5 * f.n * f.rho * f.v.squaredNorm(); });
+  }
+  double strain_energy(const State<Dim>& st) const override {
+    return fixed_order_sum(st.solid.size(), [&](std::size_t p) {
+      return materials_[st.solid.material[p]]->strain_energy(st.solid, static_cast<int>(p));
+    });
+  }
+  double external_power(const State<Dim>& st, const StepContext& ctx) const override {
+    const ParticleSet<Dim>& ps = st.solid;
+    Vec<Dim> b;
+    for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
+    double power = fixed_order_sum(ps.size(), [&](std::size_t p) { return ps.m[p] * b.dot(ps.v[p]); });
+    power += fluid_integral([&](const fem::FluidPoint<Dim>& f) { return f.n * f.rho * b.dot(f.v); });
+    loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool) { power += f_p.dot(ps.v[p]); });
+    return power;
+  }
+  void set_initialisation(State<Dim>&, const scene::Initialisation* phase) override {
+    set_plastic(materials_, phase == nullptr || phase->plasticity);
+    damping_ = phase_damping(phase, scene_damping_);
+  }
+  std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
+
+  void complete_output_fields(State<Dim>& st, bool) override {
+    // The pore pressure and the fluid's velocity at the soil points, from the nodal solution.
+    ParticleSet<Dim>& ps = st.solid;
+    if (ps.size() == 0 || sd_.size() != ps.size()) return;
+    const bool has_vf = !ps.v_f.empty();
+    for (std::size_t p = 0; p < ps.size(); ++p) {
+      double pp = 0.0;
+      Vec<Dim> vf = Vec<Dim>::Zero();
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        pp += N * fluid_.p[i];
+        vf += N * fluid_.v[i];
+      });
+      ps.p[p] = pp;
+      if (has_vf) ps.v_f[p] = vf;
+    }
+  }
+
+  GridFields grid_fields(const State<Dim>&) const override {
+    GridFields gf;
+    const auto& nn = grid_.nodes_per_axis();
+    for (int a = 0; a < Dim; ++a) gf.nodes[a] = nn[a];
+    const std::size_t n = grid_.num_nodes();
+    gf.cloud.points.resize(n);
+    grid_.for_each_node(grid_.all_nodes(), [&](std::size_t i, const std::array<int, Dim>& ijk) {
+      const Vec<Dim> x = grid_.node_position(ijk);
+      gf.cloud.points[i] = {x[0], x[1], Dim == 3 ? x[Dim - 1] : 0.0};
+    });
+    auto& v = gf.cloud.add("fluid_velocity", 3).values;
+    auto& p = gf.cloud.add("pressure", 1).values;
+    auto& phi = gf.cloud.add("phase_field", 1).values;
+    auto& por = gf.cloud.add("porosity", 1).values;
+    auto& th = gf.cloud.add("solid_fraction", 1).values;
+    v.resize(3 * n, 0.0);
+    p.resize(n);
+    phi.resize(n);
+    por.resize(n);
+    th.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (int a = 0; a < Dim; ++a) v[3 * i + a] = fluid_.v[i][a];
+      p[i] = fluid_.p[i];
+      phi[i] = fluid_.phi[i];
+      por[i] = soil_.n[i];
+      th[i] = soil_.theta[i];
+    }
+    return gf;
+  }
+
+  bool fluid_on_grid() const override { return true; }
+  double grid_value(const std::array<double, 3>& x, GridQuantity q) const override {
+    Vec<Dim> xp;
+    for (int a = 0; a < Dim; ++a) xp[a] = x[a];
+    if (!inside(xp)) return std::numeric_limits<double>::quiet_NaN();
+    double out = 0.0;
+    interpolate(xp, [&](std::size_t i, double N) {
+      switch (q) {
+        case GridQuantity::pressure: out += N * fluid_.p[i]; break;
+        case GridQuantity::velocity_x: out += N * fluid_.v[i][0]; break;
+        case GridQuantity::velocity_y: out += N * fluid_.v[i][1]; break;
+        case GridQuantity::velocity_z: out += Dim == 3 ? N * fluid_.v[i][Dim - 1] : 0.0; break;
+        case GridQuantity::phase: out += N * fluid_.phi[i]; break;
+      }
+    });
+    return out;
+  }
+  /// Scans down the vertical line (x, y, z) from the grid's top in steps of h/16 for the first
+  /// point with phi >= 1/2, then places the crossing by linear interpolation between the samples.
+  double grid_water_level(double x, double z) const override {
+    const double h = grid_.h(), top = grid_.max()[1], bottom = grid_.min()[1];
+    std::array<double, 3> pt{x, top, z};
+    double phi_above = grid_value(pt, GridQuantity::phase);
+    if (std::isnan(phi_above)) return phi_above;
+    for (double y = top - h / 16; y >= bottom - 1e-12; y -= h / 16) {
+      pt[1] = std::max(y, bottom);
+      const double phi = grid_value(pt, GridQuantity::phase);
+      if (phi >= 0.5) return phi_above < 0.5 ? pt[1] + (phi - 0.5) / (phi - phi_above) * (h / 16) : top;
+      phi_above = phi;
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+
+  std::vector<typename Formulation<Dim>::Counter> counters() const override {
+    const double V = phase_.volume(fluid_.phi, soil_.n);
+    return {{"fluid factorisations", static_cast<double>(fluid_.factorisations()), ""},
+            {"fluid Krylov iterations per step",
+             fluid_.solves > 0 ? static_cast<double>(fluid_.krylov_iterations) / static_cast<double>(fluid_.solves) : 0.0, ""},
+            {"water volume change", water_volume0_ > 0.0 ? (V - water_volume0_) / water_volume0_ * 100.0 : 0.0, "%"}};
+  }
+
+  // Restart: the fluid's nodal state (v^L, v^{L-1}, p, phi) and the schedule order. The LU factor
+  // is not saved: a restored run factorises afresh at its first step, and so does a saving run at
+  // its next step (refactorise_), so that both continue with the same factor, bit for bit.
+  void save(Checkpoint& c) const override {
+    save_order(c, "formulation/schedule_order", schedule_);
+    c.put("formulation/fluid_v", fluid_.v);
+    c.put("formulation/fluid_v_old", fluid_.v_old);
+    c.put("formulation/fluid_p", fluid_.p);
+    c.put("formulation/phi", fluid_.phi);
+    c.put("formulation/water_volume0", std::vector<double>{water_volume0_});
+    fluid_.refactorise();
+  }
+  void restore(const Checkpoint& c, State<Dim>& st) override {
+    regroup_by_material(st.solid, material_particles_);
+    restore_order(c, "formulation/schedule_order", schedule_);
+    c.get("formulation/fluid_v", fluid_.v);
+    c.get("formulation/fluid_v_old", fluid_.v_old);
+    c.get("formulation/fluid_p", fluid_.p);
+    c.get("formulation/phi", fluid_.phi);
+    std::vector<double> v0;
+    c.get("formulation/water_volume0", v0);
+    water_volume0_ = v0.empty() ? -1.0 : v0[0];
+    fluid_.refactorise();
+  }
+
+ private:
+  static constexpr double kDefaultWidthCells = 2.5;  // interface 5 %-95 % width, cells
+  static constexpr double kDefaultMobility = 500.0;   // 1/s, the interface's relaxation rate M W
+  static constexpr double kMaxStep = 1e-3;            // s, dt auto with nothing moving
+  static constexpr double kAirDensity = 1.2, kAirViscosity = 1.8e-5;  // kg/m^3, Pa s (solver.air)
+
+  /// The fluid's Dirichlet conditions on the grid faces (boundaries[].on = x_min ... z_max):
+  /// impermeable stops the normal velocity, and with a fixed solid every component (no-slip);
+  /// drained gives p = 0, pressure p = value. Faces without a `fluid` entry are impermeable
+  /// where the solid is fixed, roller or friction, drained where it is free; faces not listed are
+  /// drained (as the other formulations, loads.hpp GridBoundary::fluid).
+  typename fem::Fluid<Dim, Shape>::Conditions fluid_conditions(const scene::Scene& s) const {
+    typename fem::Fluid<Dim, Shape>::Conditions bc;
+    const std::size_t n = grid_.num_nodes();
+    bc.fixed.assign(n, 0);
+    bc.p_value.assign(n, 0.0);
+    const auto& nn = grid_.nodes_per_axis();
+    static const char* names[6] = {"x_min", "x_max", "y_min", "y_max", "z_min", "z_max"};
+    for (int f = 0; f < 2 * Dim; ++f) {
+      const int axis = f / 2, side = f % 2;
+      std::uint8_t bits = 1u << Dim;  // drained (not listed)
+      double value = 0.0;
+      for (const auto& b : s.boundaries) {
+        if (b.on != names[f]) continue;
+        const bool impermeable = b.fluid ? *b.fluid == scene::FluidBc::impermeable : b.solid != scene::SolidBc::free;
+        if (impermeable) {
+          bits = b.solid == scene::SolidBc::fixed ? static_cast<std::uint8_t>((1u << Dim) - 1) : static_cast<std::uint8_t>(1u << axis);
+        } else {
+          bits = 1u << Dim;
+          if (b.fluid && *b.fluid == scene::FluidBc::pressure) value = b.fluid_value;
+        }
+      }
+      NodeBox<Dim> face = grid_.all_nodes();
+      face.lo[axis] = face.hi[axis] = side == 0 ? 0 : nn[axis] - 1;
+      grid_.for_each_node(face, [&](std::size_t i, const auto&) {
+        bc.fixed[i] |= bits;
+        if (bits >> Dim & 1) bc.p_value[i] = value;
+      });
+    }
+    return bc;
+  }
+
+  /// p at t = 0: hydrostatic under the phase field's water, rho(phi) |g| integrated down each
+  /// vertical line of nodes from the top (p = 0 there); the first step's solve replaces it, and
+  /// the soil's first pressure force reads the solved one. It spares the first steps the
+  /// pressure increment from zero to hydrostatic (PSPG on the increment, fem/fluid.hpp).
+  void initial_hydrostatic_pressure(const scene::Scene& s) {
+    const double g = -s.gravity[1];
+    if (!(g > 0.0) || s.gravity_ramp > 0.0 || s.initialisation.enabled()) return;
+    const auto& nn = grid_.nodes_per_axis();
+    const auto& pr = fluid_.properties();
+    NodeBox<Dim> top = grid_.all_nodes();
+    top.lo[1] = top.hi[1] = nn[1] - 1;
+    grid_.for_each_node(top, [&](std::size_t, std::array<int, Dim> ijk) {
+      double pp = 0.0;
+      for (int j = nn[1] - 1; j >= 0; --j) {
+        ijk[1] = j;
+        const std::size_t i = grid_.index(ijk);
+        if (j < nn[1] - 1) {
+          auto up = ijk;
+          up[1] = j + 1;
+          const std::size_t iu = grid_.index(up);
+          const double phi = std::clamp(0.5 * (fluid_.phi[i] + fluid_.phi[iu]), 0.0, 1.0);
+          pp += (pr.rho_w * phi + pr.rho_a * (1.0 - phi)) * g * (grid_.node_position(up)[1] - grid_.node_position(ijk)[1]);
+        }
+        fluid_.p[i] = pp;
+      }
+    });
+  }
+
+  /// (i)-(ii) Soil P2G and the fluid's view of the soil.
+  void soil_to_grid(State<Dim>& st, const StepContext& ctx, const Vec<Dim>& b) {
+    ParticleSet<Dim>& ps = st.solid;
+    const std::size_t nodes = grid_.num_nodes();
+    if (ps.size() == 0) {
+      soil_.resize(nodes);
+      return;
+    }
+    long bad = -1;
+    box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);
+    if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
+    collect_face_forces<Shape>(grid_, loads_, ps, st.index_of_id, ctx.t, box_, face_forces_);
+    transfer::build_schedule(grid_, sd_, schedule_);
+    transfer::clear_nodes(grid_, box_, solid_);
+    transfer::scatter_mass_momentum_force(grid_, schedule_, ps, sd_, b, solid_);
+    for (const auto& ff : face_forces_)
+      for_each_loaded_node(
+          grid_, ff, [&](std::size_t i) { return solid_.acc[i].m > transfer::empty_node_mass; },
+          [&](std::size_t i, double N) { solid_.acc[i].f += N * ff.f; });
+    // theta, n and k (eqs. 78, 79, 81)
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { sums_[i] = SoilSums{}; });
+    schedule_.run([&](int p) {
+      const double V = ps.V[p], n = ps.n[p];
+      const double k = to_intrinsic_ * perm_[ps.material[p]].at_point(n, V, ps.V0[p]);
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
+        SoilSums& s = sums_[i];
+        s.V += N * V;
+        s.Vs += N * (1.0 - n) * V;
+        s.mk += N * ps.m[p] * k;
+      });
+    });
+    soil_.resize(nodes);  // n = 1, theta = k = 0, v_s = 0 where no soil
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      const double m = solid_.acc[i].m;
+      if (!(m > transfer::empty_node_mass)) {
+        solid_.vL[i].setZero();
+        return;
+      }
+      const SoilSums& s = sums_[i];
+      soil_.theta[i] = std::min(1.0, s.V / support_[i]);
+      soil_.n[i] = std::clamp(1.0 - s.Vs / support_[i], kMinNodalPorosity, 1.0);
+      soil_.k[i] = s.mk / m;
+      solid_.vL[i] = solid_.acc[i].mv / m;
+      soil_.vs[i] = solid_.vL[i];
+    });
+  }
+
+  /// (v) The fluid's pressure on the skeleton and the drag coefficient, per node, integrated over
+  /// the cells that hold soil (eq. 54; Q lumped):
+  ///   F_I = int ((1 - n) grad N_I - N_I grad n) p^{L+1},   Q_I = int N_I c(|v_f^L - v_s^L|).
+  void fluid_on_soil(double) {
+    std::fill(soil_force_.begin(), soil_force_.end(), Vec<Dim>::Zero());
+    std::fill(drag_.begin(), drag_.end(), 0.0);
+    std::array<int, Dim> cells;
+    for (int a = 0; a < Dim; ++a) cells[a] = grid_.axis(a).cells;
+    const int threads = omp_get_max_threads();
+    if (static_cast<int>(cell_.size()) < threads) cell_.resize(threads);
+    const auto& pr = fluid_.properties();
+    fem::for_each_cell_coloured<Dim, S>(cells, [&](const std::array<int, Dim>& c) {
+      for (int a = 0; a < Dim; ++a)
+        if (c[a] + S - 1 < box_.lo[a] || c[a] > box_.hi[a]) return;
+      typename Basis::Cell& cl = cell_[omp_get_thread_num()];
+      fluid_.basis().eval(c, cl);
+      bool soil = false;
+      for (int k = 0; k < Basis::K; ++k) soil = soil || solid_.acc[cl.node[k]].m > transfer::empty_node_mass;
+      if (!soil) return;
+      fem::FluidPoint<Dim> f;
+      for (int gp = 0; gp < Basis::G; ++gp) {
+        // v_f^L: fluid_.v_old after the step
+        double n = 0.0, pp = 0.0, theta = 0.0, k = 0.0, phi = 0.0;
+        Vec<Dim> gn = Vec<Dim>::Zero(), vf = Vec<Dim>::Zero(), vs = Vec<Dim>::Zero();
+        for (int kk = 0; kk < Basis::K; ++kk) {
+          const std::size_t i = cl.node[kk];
+          const double N = cl.N[gp][kk];
+          n += N * soil_.n[i];
+          gn += soil_.n[i] * cl.dN[gp][kk];
+          pp += N * fluid_.p[i];
+          theta += N * soil_.theta[i];
+          k += N * soil_.k[i];
+          phi += N * fluid_.phi[i];
+          vf += N * fluid_.v_old[i];
+          vs += N * soil_.vs[i];
+        }
+        phi = std::clamp(phi, 0.0, 1.0);
+        const double rho = pr.rho_w * phi + pr.rho_a * (1.0 - phi), mu = pr.mu_w * phi + pr.mu_a * (1.0 - phi);
+        const double cd = fem::drag_coefficient(std::clamp(theta, 0.0, 1.0), n, k, mu, rho, (vf - vs).norm(), pr);
+        const double w = cl.JxW[gp];
+        for (int kk = 0; kk < Basis::K; ++kk) {
+          const std::size_t i = cl.node[kk];
+          soil_force_[i] += w * pp * ((1.0 - n) * cl.dN[gp][kk] - cl.N[gp][kk] * gn);
+          drag_[i] += w * cl.N[gp][kk] * cd;
+        }
+      }
+    });
+  }
+
+  /// (v) v_s^{L+1} = (M v_s^L + dt (F + Q v_f^{L+1})) / (M + dt Q), local damping on F; BCs.
+  void update_soil_grid(double dt) {
+    const double alpha = damping_;
+    grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
+      const auto& nd = solid_.acc[i];
+      const double m = nd.m;
+      if (!(m > transfer::empty_node_mass)) {
+        solid_.v[i].setZero();
+        return;
+      }
+      const Vec<Dim> vL = solid_.vL[i];
+      const Vec<Dim> F = local_damping<Dim>(Vec<Dim>(nd.f + soil_force_[i]), vL, alpha);
+      const double Q = drag_[i];
+      solid_.v[i] = (m * vL + dt * (F + Q * fluid_.v[i])) / (m + dt * Q);
+    });
+    bcs_solid_.apply(grid_, box_, solid_.v, true);
+  }
+
+  /// (vi) L = sum v_s (x) grad N; F, V, porosity ((1 - n) V constant, n <= 0.99); F-bar when the
+  /// scene asks; the effective stress.
+  long update_soil(State<Dim>& st, double dt) {
+    ParticleSet<Dim>& ps = st.solid;
+    const long n = static_cast<long>(ps.size());
+#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      MatD<Dim> L = MatD<Dim>::Zero();
+      shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double, const Vec<Dim>& dN) {
+        L.noalias() += solid_.v[i] * dN.transpose();
+      });
+      ps.L[p] = L;
+    }
+    fbar_.apply(grid_, box_, schedule_, sd_, dt, st, materials_, material_particles_);
+    long bad = transfer::no_particle;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p) {
+      const double J = porous::update_skeleton<Dim>(ps.L[p], dt, ps.F[p], ps.V[p], ps.V0[p], ps.n[p]);
+      ps.n[p] = std::min(ps.n[p], kMaxPointPorosity);
+      if (!(J > 0.0) || !(ps.n[p] > 0.0)) bad = std::min(bad, p);
+    }
+    for (std::size_t k = 0; k < materials_.size(); ++k) {
+      if (material_particles_[k].empty() || !materials_[k]) continue;
+      const long m_bad = materials_[k]->update_stress(ps, material_particles_[k], dt);
+      if (m_bad >= 0) st.health.report(m_bad, "solid", "stress update failed (" + materials_[k]->name() + ")");
+    }
+    return bad == transfer::no_particle ? -1 : bad;
+  }
+
+  /// A non-finite nodal velocity, pressure or phase field: the node is reported.
+  void check_fluid(State<Dim>& st) const {
+    for (std::size_t i = 0; i < fluid_.p.size(); ++i)
+      if (!std::isfinite(fluid_.p[i]) || !fluid_.v[i].allFinite()) {
+        const Vec<Dim> x = grid_.node_position(grid_ijk(i));
+        st.health.report_node(static_cast<long>(i), {x[0], x[1], Dim == 3 ? x[Dim - 1] : 0.0}, "fluid",
+                              "fluid velocity or pressure not finite");
+        return;
+      }
+  }
+  std::array<int, Dim> grid_ijk(std::size_t i) const {
+    std::array<int, Dim> ijk;
+    for (int a = 0; a < Dim; ++a) {
+      ijk[a] = static_cast<int>(i % static_cast<std::size_t>(grid_.nodes_per_axis()[a]));
+      i /= static_cast<std::size_t>(grid_.nodes_per_axis()[a]);
+    }
+    return ijk;
+  }
+
+  bool inside(const Vec<Dim>& x) const {
+    for (int a = 0; a < Dim; ++a)
+      if (!(x[a] >= grid_.min()[a] - 1e-12 && x[a] <= grid_.max()[a] + 1e-12)) return false;
+    return true;
+  }
+  template <class Fn>
+  void interpolate(const Vec<Dim>& x, Fn&& fn) const {
+    shape::ShapeData<Dim, S> sd;
+    for (int a = 0; a < Dim; ++a) Shape::eval(grid_.axis(a), x[a], 0.0, sd.base[a], sd.w[a], sd.dw[a]);
+    shape::for_each_node(grid_, sd, [&](std::size_t i, double N, const Vec<Dim>&) { fn(i, N); });
+  }
+
+  /// int g(fields) dOmega over the grid's cells (serial, fixed order): the fluid's energies.
+  template <class Fn>
+  double fluid_integral(Fn&& g) const {
+    double sum = 0.0;
+    typename Basis::Cell c;
+    NodeBox<Dim> cells;
+    for (int a = 0; a < Dim; ++a) cells.lo[a] = 0, cells.hi[a] = grid_.axis(a).cells - 1;
+    fem::FluidPoint<Dim> f;
+    grid_.for_each_node(cells, [&](std::size_t, const std::array<int, Dim>& ijk) {
+      fluid_.basis().eval(ijk, c);
+      for (int gp = 0; gp < Basis::G; ++gp) {
+        fluid_.fields_at(c, gp, soil_, f);
+        // fields_at's v is v^L of the coming step: the current nodal velocity
+        sum += c.JxW[gp] * g(f);
+      }
+    });
+    return sum;
+  }
+
+  Grid<Dim> grid_;
+  GridBoundary<Dim> bcs_solid_;
+  ParticleLoads<Dim> loads_;
+  double flip_, damping_, scene_damping_;
+  std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
+  std::vector<std::vector<int>> material_particles_;
+  std::vector<porous::Permeability> perm_;  // per material (soils)
+  double to_intrinsic_ = 0.0;               // k [m^2] per k_h [m/s]: mu_w / (rho_w g)
+  fem::Fluid<Dim, Shape> fluid_;
+  fem::PhaseField<Dim, Shape> phase_;
+  double water_volume0_ = -1.0;  // m^Dim, int n phi at the first step (-1 before it)
+  fem::SoilOnGrid<Dim> soil_;
+  NodeFields<Dim> solid_;
+  std::vector<SoilSums> sums_;
+  std::vector<Vec<Dim>> soil_force_;  // N: the fluid's pressure on the skeleton (v)
+  std::vector<double> drag_;          // kg/s: Q_I (v)
+  std::vector<double> support_;       // m^Dim: Omega_I = int N_I
+  std::vector<typename Basis::Cell> cell_;
+  NodeBox<Dim> box_;
+  std::vector<shape::ShapeData<Dim, S>> sd_;
+  std::vector<FaceForce<Dim, S>> face_forces_;
+  StripeSchedule schedule_;
+  Reorder<Dim> reorder_;
+  FBar<Dim, S> fbar_;
+};
+
+}  // namespace
+
+template <int Dim>
+std::unique_ptr<Formulation<Dim>> make_mpm_fem(const scene::Scene& s, const State<Dim>& state) {
+  return make_for_shape<MpmFem, Dim>(s, state);
+}
+
+template std::unique_ptr<Formulation<2>> make_mpm_fem<2>(const scene::Scene&, const State<2>&);
+template std::unique_ptr<Formulation<3>> make_mpm_fem<3>(const scene::Scene&, const State<3>&);
+
+}  // namespace swmpm
