@@ -570,13 +570,15 @@ const Table& solver_table() {
                       "interpolated at the point below one half) stay as free water (`keep`) or leave the "
                       "run (`remove`: an outflow through a drained free surface into a reservoir that is not "
                       "modelled, as in B2; see docs/formulations.md)."},
-          {.name = "drag_integration", .type = Type::choice, .values = {"implicit", "semi-implicit"},
+          {.name = "drag_integration", .type = Type::choice, .values = {"implicit", "semi-implicit", "explicit"},
            .meaning = "Semi-implicit formulations: the soil–water drag of the predictor implicit in both "
                       "phases' velocities (`implicit`, the default) or in the water's only, the soil taking "
                       "it from v_w* and its own v_s^t (`semi-implicit`, seed 001 eqs. 52–53). The seed's "
                       "form amplifies the relative velocity by about M_w/M_s where the drag is stiff, so a "
                       "node with much more water than soil (free water over soil, a seepage exit) diverges; "
-                      "see docs/formulations.md, \"Implicit drag\"."},
+                      "see docs/formulations.md, \"Implicit drag\". mpm-fem: the drag in the fluid's "
+                      "equations with its new velocity (`implicit`, the default) or its old one (`explicit`, "
+                      "seed 004 eqs. 64–66, stable only below dt = 2 ρ / (n μ / k))."},
           {.name = "drag", .type = Type::choice, .values = {"darcy", "ergun"},
            .meaning = "explicit-double-point: the soil–liquid drag, `darcy` n² μ / κ (v_L − v_S) or `ergun` (the "
                       "default), which adds β n³ ρ_L ‖v_L − v_S‖ (v_L − v_S), β = B / √(κ A n³) (seed 003 eqs. 9–10)."},
@@ -624,13 +626,13 @@ const Table& stabilisation_table() {
            .meaning = "Smooth volumetric strain over cells."},
           {.name = "pressure", .type = Type::choice,
            .values = {"none", "mfvp-constant", "mfvp-linear", "mfvp-quadratic", "node-remap", "cell-constant",
-                      "pspg-increment", "pspg"},
+                      "pspg", "pspg-increment"},
            .meaning = "Pore-pressure stabilisation; default by formulation: `mfvp-linear` "
                       "(explicit-single-point, semi-implicit, explicit-double-point: on the liquid points' "
-                      "pressure rate), `pspg-increment` (mpm-fem), `none` otherwise. `cell-constant` "
+                      "pressure rate), `pspg` (mpm-fem), `none` otherwise. `cell-constant` "
                       "(explicit-single-point): one pressure per grid cell, its rate the exact transpose of "
-                      "the pressure forces. mpm-fem: PSPG on the pressure's increment over the step, or `pspg` on "
-                      "the seed's full momentum residual (docs/formulations.md)."},
+                      "the pressure forces. mpm-fem: PSPG on the seed's full momentum residual (`pspg`) or on its "
+                      "increment over the step (`pspg-increment`; docs/formulations.md)."},
           {.name = "fbar", .type = Type::choice, .def = "none", .values = {"none", "standard", "modified"},
            .meaning = "F-bar treatment of volumetric locking (seed 001 §4.4.2, every formulation): `standard` "
                       "scales ΔF by the node-wise average of det ΔF (eqs. 79-80); `modified` also averages the "

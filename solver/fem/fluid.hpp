@@ -28,9 +28,14 @@
 // (Adams–Bashforth). The system (eqs. 67-68) is linear in (v^{L+1}, p^{L+1}): assembled into a
 // fixed pattern (assembly.hpp) and solved by UMFPACK (linear/factorisation.hpp).
 //
-// Beyond the seed: the viscous term int n mu grad w : grad v (Laplacian form, theta = 1/2). The
-// seed's weak form has none (mu enters only the drag and tau); water's 1e-3 Pa s does not change
-// the examples' results, and it keeps the air's momentum from being purely inviscid.
+// Beyond the seed (each measured in docs/formulations.md, "mpm-fem"):
+// - the viscous term int n mu grad w : grad v (Laplacian form, theta = 1/2); the seed's weak form
+//   has none (mu enters only the drag and tau);
+// - tau_c >= h^2 / (4 Dim tau_m): the seed's tau_c vanishes with the speed and leaves a row-to-row
+//   velocity mode that the quadratic B-splines' weak continuity does not see;
+// - the drag implicit in v^{L+1} (implicit_drag; the seed's explicit drag needs dt < 2 rho k / (n mu));
+// - optionally PSPG on the residual's increment over the step (Pspg::increment), which holds
+//   hydrostatics across the water-air density jump exactly but does not stabilise steady flows.
 #pragma once
 
 #include <omp.h>
@@ -103,6 +108,9 @@ class Fluid {
   struct Conditions {
     std::vector<std::uint8_t> fixed;
     std::vector<double> p_value;
+    /// Per node: -p_bar n_out int N dGamma over faces with a prescribed pressure (N, per unit
+    /// porosity): the boundary term of the pressure's integration by parts, times n_I each step.
+    std::vector<Vec<Dim>> face_load;
   };
 
   void setup(const Grid<Dim>& g, const FluidProperties& props, Conditions bcs) {
@@ -182,8 +190,14 @@ class Fluid {
   std::vector<Vec<Dim>> v, v_old;  // m/s, nodal v^L and v^{L-1} (after step: v^{L+1}, v^L)
   std::vector<double> p;           // Pa, nodal pressure (compression positive)
   std::vector<double> phi;         // the phase field's nodal values (PhaseField keeps them current)
-  /// PSPG on the pressure's increment (true) or on the seed's full momentum residual (false).
-  bool pressure_increment = true;
+  /// What PSPG weights (class comment): the seed's full momentum residual (default) or its
+  /// increment over the step.
+  enum class Pspg { residual, increment };
+  Pspg pspg = Pspg::residual;
+  /// The drag P^ = c (v - v_s) with v^{L+1} (true) or v^L (false, the seed's eq. 64-66); c at L.
+  bool implicit_drag = true;
+  /// The shock-capturing (grad-div) coefficient's floor, in units of h^2 / (4 Dim tau_m) (0: the seed's).
+  double min_grad_div = 1.0;
   double seconds_assemble = 0.0, seconds_factorise = 0.0, seconds_solve = 0.0;
 
  private:
@@ -210,25 +224,31 @@ class Fluid {
         const double tau = 1.0 / std::sqrt(4.0 / (dt * dt) + 4.0 * speed * speed / (h * h) +
                                            16.0 * nu * nu / (h * h * h * h));  // eq. 26
         const double Re = speed * h / (2.0 * nu);                                // eq. 28
-        const double tau_c = 0.5 * h * speed * (Re <= 3.0 ? Re / 3.0 : 1.0);     // eqs. 27, 29
+        // eqs. 27, 29; at least h^2 / (4 Dim tau_m) (Bazilevs et al. 2007's tau_C on this grid): the
+        // seed's vanishes with the speed, and a slow through-flow kept a row-to-row velocity mode of
+        // +-13 % that the quadratic B-splines' weak continuity does not see (docs/formulations.md).
+        const double tau_c = std::max(0.5 * h * speed * (Re <= 3.0 ? Re / 3.0 : 1.0), min_grad_div * h * h / (4.0 * Dim * tau));
         const double W = f.n * f.rho;
         const Vec<Dim> rel = f.v - f.vs;
         const double cd = drag_coefficient(f.theta, f.n, f.k, f.mu, f.rho, rel.norm(), props_);
-        // The residual's explicit part r = n rho (v^L/dt - 1/2 vbar.grad v^L + b) - P^(L).
-        const Vec<Dim> r = W * (f.v / dt - 0.5 * f.grad_v * f.vbar + b) - cd * rel;
-        // PSPG's explicit part: the seed's full residual (r), or the increment's over the step
-        // (pressure_increment): the static part at L, n grad p^L - n rho b + P^(L), subtracted,
-        // so r_pspg = n rho (v^L/dt - 1/2 vbar.grad v^L) + n grad p^L (see the class comment).
-        Vec<Dim> grad_p = Vec<Dim>::Zero();
-        if (pressure_increment)
-          for (int k = 0; k < K; ++k) grad_p += p[L.c.node[k]] * L.c.dN[gp][k];
-        const Vec<Dim> r_pspg = pressure_increment ? Vec<Dim>(r - W * b + cd * rel + f.n * grad_p) : r;
+        // The residual's explicit part r = n rho (v^L/dt - 1/2 vbar.grad v^L + b) - P^(L); with
+        // the drag implicit, P^ = c (v^{L+1} - v_s^L) (c at L): c v_s^L here, c N_b on the left.
+        const Vec<Dim> r = W * (f.v / dt - 0.5 * f.grad_v * f.vbar + b) - (implicit_drag ? Vec<Dim>(-cd * f.vs) : Vec<Dim>(cd * rel));
+        const double cdi = implicit_drag ? cd : 0.0;
+        // PSPG's explicit part: the seed's full residual r (default), or its increment over the
+        // step (Pspg::increment: the static part at L, n grad p^L - n rho b + P^(L), subtracted;
+        // + c v^L with the drag implicit, whose c v^{L+1} is on the left; see the class comment).
+        Vec<Dim> static_part = Vec<Dim>::Zero();
+        if (pspg == Pspg::increment)
+          for (int k = 0; k < K; ++k) static_part += (f.n * p[L.c.node[k]]) * L.c.dN[gp][k];
+        const Vec<Dim> r_pspg =
+            pspg == Pspg::residual ? r : Vec<Dim>(W * (f.v / dt - 0.5 * f.grad_v * f.vbar) + cdi * f.v + static_part);
         const double div_nv = f.n * f.grad_v.trace() + f.grad_n.dot(f.v);     // div(n v^L)
         const double div_svs = (1.0 - f.n) * f.div_vs - f.grad_n.dot(f.vs);  // div((1 - n) v_s)
         double ugN[K], T[K];
         for (int k = 0; k < K; ++k) {
           ugN[k] = f.vbar.dot(L.c.dN[gp][k]);
-          T[k] = W * (L.c.N[gp][k] / dt + 0.5 * ugN[k]);  // n rho (d/dt + 1/2 vbar.grad) of N_k
+          T[k] = W * (L.c.N[gp][k] / dt + 0.5 * ugN[k]) + cdi * L.c.N[gp][k];  // n rho (d/dt + 1/2 vbar.grad) + c of N_k
         }
         for (int ka = 0; ka < K; ++ka) {
           const double Na = L.c.N[gp][ka];
@@ -283,6 +303,9 @@ class Fluid {
       for (int ka = 0; ka < K; ++ka)
         for (int aa = 0; aa < B; ++aa) rhs[static_cast<long>(L.c.node[ka]) * B + aa] += L.fe[ka * B + aa];
     });
+    for (std::size_t i = 0; i < bcs_.face_load.size(); ++i)
+      if (bcs_.face_load[i].squaredNorm() > 0.0)
+        for (int a = 0; a < Dim; ++a) rhs[static_cast<long>(i) * B + a] += soil.n[i] * bcs_.face_load[i][a];
     sys_.apply_fixed(1.0);
     seconds_assemble += omp_get_wtime() - t0;
   }

@@ -107,7 +107,9 @@ class MpmFem final : public Formulation<Dim> {
       if (m.has("ergun_b")) props.forchheimer = m.at("ergun_b");
     }
     fluid_.setup(grid_, props, fluid_conditions(s));
-    fluid_.pressure_increment = s.solver.stabilisation.pressure != "pspg";
+    const auto& pspg = s.solver.stabilisation.pressure;
+    fluid_.pspg = pspg == "pspg-increment" ? fem::Fluid<Dim, Shape>::Pspg::increment : fem::Fluid<Dim, Shape>::Pspg::residual;
+    fluid_.implicit_drag = s.solver.drag_integration != "explicit";
     // The phase field: preprocess's nodal phi (particles/phase_field.vtu).
     if (state.phase_field.points.size() == grid_.num_nodes()) {
       const auto* phi = state.phase_field.find("phi");
@@ -184,6 +186,18 @@ class MpmFem final : public Formulation<Dim> {
       const double M = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
       for (int p : material_particles_[k]) c2 = std::max(c2, M * ps.V[p] / ps.m[p]);
     }
+    // The coupling: the soil takes the fluid's pressure of the step it moved in (the seed's
+    // staggered algorithm, steps iii and v), and a soil velocity forces a pressure that pushes it
+    // back by about dt c / (n rho_s') times itself, c = n^2 mu / k the Darcy drag coefficient and
+    // rho_s' = m / V the soil's partial density: stable for dt below about n rho_s' / c (measured on
+    // the through-flow example's 0.1 mm bed: diverged at 0.8 n rho_s' / c, ran at 0.4; D1 runs at
+    // 0.25), so the limit reported is 0.5 n rho_s' / c, scaled by time.cfl like the others.
+    double dt_couple = std::numeric_limits<double>::infinity();
+    const auto& pr = fluid_.properties();
+    for (std::size_t p = 0; p < ps.size(); ++p) {
+      const double n = ps.n[p], k = to_intrinsic_ * perm_[ps.material[p]].at_point(n, ps.V[p], ps.V0[p]);
+      if (k > 0.0) dt_couple = std::min(dt_couple, 0.5 * n * (ps.m[p] / ps.V[p]) / (n * n * pr.mu_w / k));
+    }
     double v2 = 0.0, vf2 = 0.0;
     for (std::size_t p = 0; p < ps.size(); ++p) v2 = std::max(v2, ps.v[p].squaredNorm());
     for (const auto& v : fluid_.v) vf2 = std::max(vf2, v.squaredNorm());
@@ -191,11 +205,12 @@ class MpmFem final : public Formulation<Dim> {
     const double dt_soil = c > 0.0 ? h / (c + vs) : std::numeric_limits<double>::infinity();
     const double dt_fluid = vf > 0.0 ? h / vf : std::numeric_limits<double>::infinity();
     std::ostringstream os;
-    if (dt_soil <= dt_fluid) os << "soil P-wave CFL (c = " << c << " m/s, |v_s|max = " << vs << " m/s)";
+    const double dt = std::min({dt_soil, dt_fluid, dt_couple});
+    if (dt == dt_couple) os << "soil-fluid coupling (0.5 n rho_s' k / (n^2 mu) = " << dt_couple << " s, the least permeable soil)";
+    else if (dt == dt_soil) os << "soil P-wave CFL (c = " << c << " m/s, |v_s|max = " << vs << " m/s)";
     else os << "fluid advective CFL (|v_f|max = " << vf << " m/s)";
-    os << "; the water is incompressible and the drag implicit for the soil";
+    os << "; the water is incompressible";
     reason = os.str();
-    const double dt = std::min(dt_soil, dt_fluid);
     return std::isfinite(dt) ? dt : kMaxStep;
   }
 
@@ -215,6 +230,16 @@ class MpmFem final : public Formulation<Dim> {
     for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
     double power = fixed_order_sum(ps.size(), [&](std::size_t p) { return ps.m[p] * b.dot(ps.v[p]); });
     power += fluid_integral([&](const fem::FluidPoint<Dim>& f) { return f.n * f.rho * b.dot(f.v); });
+    // A prescribed pressure on a grid face works on the fluid crossing it: -p int v.n_out dGamma,
+    // int N_I dGamma the face's basis integral (B-splines: the face row's N is 1 on the face).
+    for (const auto& pf : pressure_faces_) {
+      NodeBox<Dim> face = grid_.all_nodes();
+      face.lo[pf.axis] = face.hi[pf.axis] = pf.side == 0 ? 0 : grid_.nodes_per_axis()[pf.axis] - 1;
+      const double sign = pf.side == 0 ? -1.0 : 1.0;
+      grid_.for_each_node(face, [&](std::size_t i, const auto&) {
+        power -= pf.value * sign * fluid_.v[i][pf.axis] * porous::basis_integral<Shape>(grid_, i, pf.axis);
+      });
+    }
     loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool) { power += f_p.dot(ps.v[p]); });
     return power;
   }
@@ -338,7 +363,7 @@ class MpmFem final : public Formulation<Dim> {
   }
 
  private:
-  static constexpr double kDefaultWidthCells = 2.5;  // interface 5 %-95 % width, cells
+  static constexpr double kDefaultWidthCells = 3.0;  // interface 5 %-95 % width, cells
   static constexpr double kDefaultMobility = 500.0;   // 1/s, the interface's relaxation rate M W
   static constexpr double kMaxStep = 1e-3;            // s, dt auto with nothing moving
   static constexpr double kAirDensity = 1.2, kAirViscosity = 1.8e-5;  // kg/m^3, Pa s (solver.air)
@@ -348,11 +373,12 @@ class MpmFem final : public Formulation<Dim> {
   /// drained gives p = 0, pressure p = value. Faces without a `fluid` entry are impermeable
   /// where the solid is fixed, roller or friction, drained where it is free; faces not listed are
   /// drained (as the other formulations, loads.hpp GridBoundary::fluid).
-  typename fem::Fluid<Dim, Shape>::Conditions fluid_conditions(const scene::Scene& s) const {
+  typename fem::Fluid<Dim, Shape>::Conditions fluid_conditions(const scene::Scene& s) {
     typename fem::Fluid<Dim, Shape>::Conditions bc;
     const std::size_t n = grid_.num_nodes();
     bc.fixed.assign(n, 0);
     bc.p_value.assign(n, 0.0);
+    bc.face_load.assign(n, Vec<Dim>::Zero());
     const auto& nn = grid_.nodes_per_axis();
     static const char* names[6] = {"x_min", "x_max", "y_min", "y_max", "z_min", "z_max"};
     for (int f = 0; f < 2 * Dim; ++f) {
@@ -375,6 +401,13 @@ class MpmFem final : public Formulation<Dim> {
         bc.fixed[i] |= bits;
         if (bits >> Dim & 1) bc.p_value[i] = value;
       });
+      if (value != 0.0) pressure_faces_.push_back({axis, side, value});
+      // A prescribed p != 0 pushes on the fluid through the face: the boundary term of the
+      // pressure's integration by parts, -int N_I n p n_out dGamma (eq. 20's right-hand side).
+      if (value != 0.0)
+        grid_.for_each_node(face, [&](std::size_t i, const auto&) {
+          bc.face_load[i][axis] -= value * (side == 0 ? -1.0 : 1.0) * porous::basis_integral<Shape>(grid_, i, axis);
+        });
     }
     return bc;
   }
@@ -609,6 +642,11 @@ class MpmFem final : public Formulation<Dim> {
   std::vector<porous::Permeability> perm_;  // per material (soils)
   double to_intrinsic_ = 0.0;               // k [m^2] per k_h [m/s]: mu_w / (rho_w g)
   fem::Fluid<Dim, Shape> fluid_;
+  struct PressureFace {
+    int axis, side;
+    double value;  // Pa
+  };
+  std::vector<PressureFace> pressure_faces_;  // grid faces with a prescribed p != 0 (their work)
   fem::PhaseField<Dim, Shape> phase_;
   double water_volume0_ = -1.0;  // m^Dim, int n phi at the first step (-1 before it)
   fem::SoilOnGrid<Dim> soil_;

@@ -52,6 +52,7 @@ fem::Fluid<2, Shape>::Conditions tank_conditions(const Grid<2>& g) {
   fem::Fluid<2, Shape>::Conditions bc;
   bc.fixed.assign(g.num_nodes(), 0);
   bc.p_value.assign(g.num_nodes(), 0.0);
+  bc.face_load.assign(g.num_nodes(), Vec<2>::Zero());
   const auto nn = g.nodes_per_axis();
   g.for_each_node(g.all_nodes(), [&](std::size_t i, const std::array<int, 2>& ijk) {
     if (ijk[0] == 0 || ijk[0] == nn[0] - 1) bc.fixed[i] |= 1;
@@ -69,7 +70,7 @@ TEST(EulerianFluid, WaterAtRestIsHydrostatic) {
   fem::Fluid<2, Shape> fluid;
   fluid.setup(grid, fem::FluidProperties{}, tank_conditions(grid));
   fem::PhaseFieldParameters prm;
-  prm.width = 2.5 * h;
+  prm.width = 3.0 * h;
   prm.mobility = 500.0;
   fem::PhaseField<2, Shape> pf;
   pf.setup(grid, fluid.basis(), prm);

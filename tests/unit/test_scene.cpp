@@ -479,10 +479,12 @@ TEST(SceneErrors, UnknownEnumerationValuesListTheValidOnes) {
   EXPECT_TRUE(reports(u, "/solver/escaped_water", "does not read this switch (read by semi-implicit-double-point)"));
   json v = scene_2d();  // the predictor's drag belongs to the semi-implicit formulations
   v["solver"]["drag_integration"] = "implicit";
-  EXPECT_TRUE(reports(v, "/solver/drag_integration", "read by semi-implicit-single-point, semi-implicit-double-point"));
+  EXPECT_TRUE(reports(v, "/solver/drag_integration", "read by semi-implicit-single-point, semi-implicit-double-point, mpm-fem"));
   v["formulation"] = "semi-implicit-double-point";
-  v["solver"]["drag_integration"] = "explicit";
-  EXPECT_TRUE(reports(v, "/solver/drag_integration", "expected one of: implicit, semi-implicit"));
+  v["solver"]["drag_integration"] = "explicit";  // mpm-fem's value, not the semi-implicit formulations'
+  EXPECT_TRUE(reports(v, "/solver/drag_integration", "which semi-implicit-double-point does not have; expected one of implicit, semi-implicit"));
+  v["solver"]["drag_integration"] = "sideways";
+  EXPECT_TRUE(reports(v, "/solver/drag_integration", "expected one of: implicit, semi-implicit, explicit"));
   // The conservative continuity belongs to the two-phase formulations (explicit-single-point too).
   json c = scene_2d();
   c["solver"]["continuity"] = "conservative";
