@@ -214,8 +214,16 @@ class Fluid {
     for_each_cell_coloured<Dim, Shape::support>(cells, [&](const std::array<int, Dim>& cell) {
       Local& L = local_[omp_get_thread_num()];
       basis_.eval(cell, L.c);
-      std::fill(&L.Ae[0][0], &L.Ae[0][0] + (K * B) * (K * B), 0.0);
-      std::fill(L.fe, L.fe + K * B, 0.0);
+      // Per Gauss point g (a column) and function k (a row), the factors of every term, so that each
+      // block of the cell's matrix is a sum of products (K x G)(G x K) (see the class comment):
+      //   Wt   w (N_a + s_a)         SUPG-weighted test       T    (n rho (1/dt + 1/2 vbar.grad) + c) N_b
+      //   Nt   w N_a                 Galerkin test            Nm   N_b
+      //   Ct_i w C_a,i, C = n grad N + N grad n (the divergence of n N)
+      //   Vt_i w 1/2 mu n d_i N_a    viscous                  Dm_i d_i N_b
+      //   Lt_i w 1/2 tau_c rho d_i N_a   grad-div             Cm_i C_b,i
+      //   St   w s_a n               SUPG on n grad p         Pt_i w (tau / rho) d_i N_a (PSPG)
+      //   nD_i n d_i N_b
+      auto& M = L.m;
       FluidPoint<Dim> f;
       for (int gp = 0; gp < G; ++gp) {
         fields_at(L.c, gp, soil, f);
@@ -231,10 +239,10 @@ class Fluid {
         const double W = f.n * f.rho;
         const Vec<Dim> rel = f.v - f.vs;
         const double cd = drag_coefficient(f.theta, f.n, f.k, f.mu, f.rho, rel.norm(), props_);
+        const double cdi = implicit_drag ? cd : 0.0;
         // The residual's explicit part r = n rho (v^L/dt - 1/2 vbar.grad v^L + b) - P^(L); with
         // the drag implicit, P^ = c (v^{L+1} - v_s^L) (c at L): c v_s^L here, c N_b on the left.
         const Vec<Dim> r = W * (f.v / dt - 0.5 * f.grad_v * f.vbar + b) - (implicit_drag ? Vec<Dim>(-cd * f.vs) : Vec<Dim>(cd * rel));
-        const double cdi = implicit_drag ? cd : 0.0;
         // PSPG's explicit part: the seed's full residual r (default), or its increment over the
         // step (Pspg::increment: the static part at L, n grad p^L - n rho b + P^(L), subtracted;
         // + c v^L with the drag implicit, whose c v^{L+1} is on the left; see the class comment).
@@ -245,40 +253,66 @@ class Fluid {
             pspg == Pspg::residual ? r : Vec<Dim>(W * (f.v / dt - 0.5 * f.grad_v * f.vbar) + cdi * f.v + static_part);
         const double div_nv = f.n * f.grad_v.trace() + f.grad_n.dot(f.v);     // div(n v^L)
         const double div_svs = (1.0 - f.n) * f.div_vs - f.grad_n.dot(f.vs);  // div((1 - n) v_s)
-        double ugN[K], T[K];
+        const double visc = 0.5 * f.mu * f.n, lsic = 0.5 * tau_c * f.rho, pspg_w = tau / f.rho;
         for (int k = 0; k < K; ++k) {
-          ugN[k] = f.vbar.dot(L.c.dN[gp][k]);
-          T[k] = W * (L.c.N[gp][k] / dt + 0.5 * ugN[k]) + cdi * L.c.N[gp][k];  // n rho (d/dt + 1/2 vbar.grad) + c of N_k
-        }
-        for (int ka = 0; ka < K; ++ka) {
-          const double Na = L.c.N[gp][ka];
-          const Vec<Dim>& dNa = L.c.dN[gp][ka];
-          const double wa = Na + tau * ugN[ka];  // Galerkin + SUPG weight
-          const Vec<Dim> pa = (tau / f.rho) * dNa;  // PSPG weight
-          const int ra = ka * B;
-          for (int kb = 0; kb < K; ++kb) {
-            const double Nb = L.c.N[gp][kb];
-            const Vec<Dim>& dNb = L.c.dN[gp][kb];
-            const int cb = kb * B;
-            const double visc = 0.5 * f.mu * f.n * dNa.dot(dNb);
-            const double diag = w * (wa * T[kb] + visc);
-            for (int i = 0; i < Dim; ++i) {
-              L.Ae[ra + i][cb + i] += diag;
-              // shock capturing (LSIC): 1/2 tau_c rho d_i N_a div(n N_b e_j)
-              const double sc = w * 0.5 * tau_c * f.rho * dNa[i];
-              for (int j = 0; j < Dim; ++j) L.Ae[ra + i][cb + j] += sc * (f.n * dNb[j] + f.grad_n[j] * Nb);
-              // pressure: -div(n N_a e_i) N_b + SUPG tau vbar.grad N_a n d_i N_b
-              L.Ae[ra + i][cb + Dim] += w * (-(f.n * dNa[i] + Na * f.grad_n[i]) * Nb + tau * ugN[ka] * f.n * dNb[i]);
-              // continuity: N_a div(n N_b e_i) + PSPG (tau / rho) d_i N_a T_b
-              L.Ae[ra + Dim][cb + i] += w * (Na * (f.n * dNb[i] + f.grad_n[i] * Nb) + pa[i] * T[kb]);
-            }
-            L.Ae[ra + Dim][cb + Dim] += w * f.n * pa.dot(dNb);  // PSPG (tau / rho) n grad N_a . grad N_b
+          const double N = L.c.N[gp][k];
+          const Vec<Dim>& dN = L.c.dN[gp][k];
+          const double ugN = f.vbar.dot(dN);
+          M.Nm(k, gp) = N;
+          M.Nt(k, gp) = w * N;
+          M.Wt(k, gp) = w * (N + tau * ugN);
+          M.T(k, gp) = W * (N / dt + 0.5 * ugN) + cdi * N;
+          M.St(k, gp) = w * tau * ugN * f.n;
+          for (int d = 0; d < Dim; ++d) {
+            const double C = f.n * dN[d] + f.grad_n[d] * N;
+            M.Dm[d](k, gp) = dN[d];
+            M.nD[d](k, gp) = f.n * dN[d];
+            M.Cm[d](k, gp) = C;
+            M.Ct[d](k, gp) = w * C;
+            M.Vt[d](k, gp) = w * visc * dN[d];
+            M.Lt[d](k, gp) = w * lsic * dN[d];
+            M.Pt[d](k, gp) = w * pspg_w * dN[d];
           }
-          for (int i = 0; i < Dim; ++i)
-            L.fe[ra + i] += w * (wa * r[i] - 0.5 * f.mu * f.n * f.grad_v.row(i).dot(dNa) -
-                                 tau_c * f.rho * dNa[i] * (0.5 * div_nv + div_svs));
-          L.fe[ra + Dim] += w * (-Na * div_svs + pa.dot(r_pspg));
         }
+        // right-hand sides per g: the momentum's (N_a + s_a) r_i - 1/2 mu n grad N_a . grad v_i^L -
+        // tau_c rho d_i N_a (1/2 div(n v^L) + div((1 - n) v_s)); the continuity's
+        // -N_a div((1 - n) v_s) + pi_a . r_pspg
+        for (int d = 0; d < Dim; ++d) {
+          M.r(d, gp) = r[d];
+          M.rp(d, gp) = r_pspg[d];
+          M.gv[d].col(gp) = f.grad_v.row(d).transpose();
+        }
+        M.gd(gp) = 0.5 * div_nv + div_svs;
+        M.svs(gp) = div_svs;
+      }
+      // The blocks (rows a, columns b): momentum i / velocity j, momentum i / pressure,
+      // continuity / velocity j, continuity / pressure.
+      const typename Local::MatKK diag = M.Wt.lazyProduct(M.T.transpose()) + [&] {
+        typename Local::MatKK vis = Local::MatKK::Zero();
+        for (int d = 0; d < Dim; ++d) vis.noalias() += M.Vt[d].lazyProduct(M.Dm[d].transpose());
+        return vis;
+      }();
+      typename Local::MatKK pp = Local::MatKK::Zero();
+      for (int d = 0; d < Dim; ++d) pp.noalias() += M.Pt[d].lazyProduct(M.nD[d].transpose());
+      for (int i = 0; i < Dim; ++i) {
+        for (int j = 0; j < Dim; ++j) {
+          typename Local::MatKK blk = M.Lt[i].lazyProduct(M.Cm[j].transpose());
+          if (i == j) blk += diag;
+          put_block(L, i, j, blk);
+        }
+        put_block(L, i, Dim, -M.Ct[i].lazyProduct(M.Nm.transpose()) + M.St.lazyProduct(M.Dm[i].transpose()));
+        put_block(L, Dim, i, M.Nt.lazyProduct(M.Cm[i].transpose()) + M.Pt[i].lazyProduct(M.T.transpose()));
+      }
+      put_block(L, Dim, Dim, pp);
+      for (int i = 0; i < Dim; ++i) {
+        Eigen::Matrix<double, K, 1> fi = M.Wt * M.r.row(i).transpose() - M.Lt[i] * M.gd * 2.0;
+        for (int d = 0; d < Dim; ++d) fi -= M.Vt[d] * M.gv[i].row(d).transpose();
+        for (int k = 0; k < K; ++k) L.fe[k * B + i] = fi[k];
+      }
+      {
+        Eigen::Matrix<double, K, 1> fp = -M.Nt * M.svs;
+        for (int d = 0; d < Dim; ++d) fp += M.Pt[d] * M.rp.row(d).transpose();
+        for (int k = 0; k < K; ++k) L.fe[k * B + Dim] = fp[k];
       }
       // Scatter into the CSC values and the right-hand side (this colour's cells share no node).
       std::array<int, Dim> s_of[K];
@@ -362,10 +396,26 @@ class Fluid {
   }
 
   struct Local {
+    using MatKG = Eigen::Matrix<double, K, G>;
+    using MatKK = Eigen::Matrix<double, K, K>;
+    using MatDG = Eigen::Matrix<double, Dim, G>;
+    struct Factors {
+      MatKG Nm, Nt, Wt, T, St;
+      std::array<MatKG, Dim> Dm, nD, Cm, Ct, Vt, Lt, Pt;
+      MatDG r, rp;
+      std::array<MatDG, Dim> gv;  // (grad v^L)_i. at each g, i the row
+      Eigen::Matrix<double, G, 1> gd, svs;
+    };
     typename Basis::Cell c;
+    Factors m;
     double Ae[K * B][K * B];
     double fe[K * B];
   };
+  /// Block (unknown a of every row node, unknown b of every column node) of the cell's matrix.
+  static void put_block(Local& L, int a, int b, const typename Local::MatKK& blk) {
+    for (int kb = 0; kb < K; ++kb)
+      for (int ka = 0; ka < K; ++ka) L.Ae[ka * B + a][kb * B + b] = blk(ka, kb);
+  }
 
   const Grid<Dim>* grid_ = nullptr;
   FluidProperties props_;
