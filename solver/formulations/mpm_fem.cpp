@@ -124,6 +124,7 @@ class MpmFem final : public Formulation<Dim> {
     pf.mobility = kDefaultMobility;
     pf.volume_correction = true;
     phase_.setup(grid_, fluid_.basis(), pf);
+    phase_mobility_ = pf.mobility;
     const std::size_t nodes = grid_.num_nodes();
     solid_.resize(nodes);
     sums_.assign(nodes, SoilSums{});
@@ -204,9 +205,13 @@ class MpmFem final : public Formulation<Dim> {
     const double h = grid_.h(), c = std::sqrt(c2), vs = std::sqrt(v2), vf = std::sqrt(vf2);
     const double dt_soil = c > 0.0 ? h / (c + vs) : std::numeric_limits<double>::infinity();
     const double dt_fluid = vf > 0.0 ? h / vf : std::numeric_limits<double>::infinity();
+    // The phase field's reaction 4 M phi (1 - phi)(phi - 1/2) is explicit (eq. 106): its rate at
+    // phi = 0 and 1 is 2 M, forward Euler is stable below dt = 1 / M.
+    const double dt_phase = 1.0 / phase_mobility_;
     std::ostringstream os;
-    const double dt = std::min({dt_soil, dt_fluid, dt_couple});
-    if (dt == dt_couple) os << "soil-fluid coupling (0.5 n rho_s' k / (n^2 mu) = " << dt_couple << " s, the least permeable soil)";
+    const double dt = std::min({dt_soil, dt_fluid, dt_couple, dt_phase});
+    if (dt == dt_phase) os << "the phase field's explicit reaction (1 / M_phi = " << dt_phase << " s)";
+    else if (dt == dt_couple) os << "soil-fluid coupling (0.5 n rho_s' k / (n^2 mu) = " << dt_couple << " s, the least permeable soil)";
     else if (dt == dt_soil) os << "soil P-wave CFL (c = " << c << " m/s, |v_s|max = " << vs << " m/s)";
     else os << "fluid advective CFL (|v_f|max = " << vf << " m/s)";
     os << "; the water is incompressible";
@@ -648,6 +653,7 @@ class MpmFem final : public Formulation<Dim> {
   };
   std::vector<PressureFace> pressure_faces_;  // grid faces with a prescribed p != 0 (their work)
   fem::PhaseField<Dim, Shape> phase_;
+  double phase_mobility_ = 0.0;   // 1/s, M_phi
   double water_volume0_ = -1.0;  // m^Dim, int n phi at the first step (-1 before it)
   fem::SoilOnGrid<Dim> soil_;
   NodeFields<Dim> solid_;

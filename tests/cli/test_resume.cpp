@@ -189,3 +189,13 @@ TEST(Resume, ExplicitDoublePointColumnCollapseBetweenFrames) {
   const Pair p = run_killed_and_resumed(s, "edp", 5);
   expect_identical(p, "explicit-double-point");
 }
+
+TEST(Resume, MpmFemTerzaghiBetweenFrames) {
+  // The fluid's nodal state (v^L, v^{L-1}, p, phi) and the reused LU factor: a saving run and a
+  // resumed one both factorise afresh after the checkpoint.
+  json s = shortened(example("terzaghi-mpm-fem/scene.json"), 0.1, 5);
+  s["time"]["dt"] = 1e-4;
+  s["output"]["checkpoint_interval"] = 0.013;
+  const Pair p = run_killed_and_resumed(s, "mpmfem", 3);
+  expect_identical(p, "mpm-fem");
+}
