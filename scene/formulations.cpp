@@ -136,7 +136,9 @@ std::vector<FormulationRow> make_rows() {
                   .switches = {{"/solver/stabilisation/pressure", {"pspg", "pspg-increment"}, "pspg"},
                                {"/solver/drag_integration", {"implicit", "explicit"}, "implicit"}},
                   .check = check_mpm_fem,
-                  .material_keys = {"grain_diameter", "ergun_a", "ergun_b"}});
+                  .material_keys = {"grain_diameter", "ergun_a", "ergun_b"},
+                  // The air and the phase field of the grid's fluid.
+                  .keys = {"/solver/air", "/solver/phase_field"}});
   return rows;
 }
 
@@ -146,6 +148,10 @@ const Switch* FormulationRow::find(const std::string& path) const {
   for (const Switch& w : switches)
     if (w.path == path) return &w;
   return nullptr;
+}
+
+bool FormulationRow::reads(const std::string& path) const {
+  return std::find(keys.begin(), keys.end(), path) != keys.end();
 }
 
 const std::vector<FormulationRow>& formulation_rows() {
@@ -194,6 +200,19 @@ std::vector<Problem> check_formulation(const nlohmann::json& raw, const Scene& s
       problems.push_back({path, "got " + v.dump() + ", which " + row.name + " does not have; expected one of " +
                                     join(w->values)});
     }
+  }
+  // Keys that only some formulations read (the tables list them for all).
+  std::vector<std::string> key_paths;
+  for (const FormulationRow& r : formulation_rows())
+    for (const std::string& path : r.keys)
+      if (std::find(key_paths.begin(), key_paths.end(), path) == key_paths.end()) key_paths.push_back(path);
+  for (const std::string& path : key_paths) {
+    if (row.reads(path) || !raw.contains(nlohmann::json::json_pointer(path))) continue;
+    std::vector<std::string> readers;
+    for (const FormulationRow& r : formulation_rows())
+      if (r.reads(path)) readers.push_back(r.name);
+    problems.push_back({path, "got a value, but " + row.name + " does not read this key (read by " + join(readers) +
+                                  "); remove the key"});
   }
   // Material keys that only some formulations read (the material tables list them for all).
   if (raw.contains("materials") && raw["materials"].is_array())
