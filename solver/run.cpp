@@ -455,6 +455,15 @@ class Runner {
        << " s, " << (init.plasticity ? "plastic flow on" : "elastic (plastic flow off)");
     if (init.hydraulic_conductivity) os << ", k = " << *init.hydraulic_conductivity << " m/s";
     if (init.damping) os << ", damping " << *init.damping;
+    if (!init.materials.empty()) {  // the parameters the models run with instead of the scene's
+      os << ", materials";
+      const char* sep = " ";
+      for (const auto& [name, params] : init.materials) {
+        os << sep << name << ":";
+        for (const auto& [key, value] : params) os << " " << key << " " << value;
+        sep = "; ";
+      }
+    }
     if (state_.fluid.size() && init.tie_water) os << ", water points tied to their soil points";
     log_.line(os.str());
   }
