@@ -616,13 +616,13 @@ const Table& phase_field_table() {
       {
           {.name = "interface_width", .range = positive, .unit = "m",
            .meaning = "Width of the diffuse water–air interface of the Allen–Cahn phase field φ (1 water, 0 air; "
-                      "seed 004); with the mobility it sets the gradient coefficient a and the barrier height W "
-                      "(docs/formulations.md).",
-           .default_text = "1.5 `cell_size`"},
-          {.name = "mobility", .range = positive, .unit = "m^3/(J s)",
-           .meaning = "Mobility M_φ of the Allen–Cahn equation ∂φ/∂t + v·∇φ = M_φ δF/δφ (seed 004; δF/δφ in J/m^3): "
-                      "how fast the interface relaxes to its profile.",
-           .default_text = "the solver's (docs/formulations.md)"},
+                      "seed 004), from φ = 0.05 to 0.95: 2.944 δ of the planar profile (1 + tanh(x/δ))/2, from "
+                      "which the gradient coefficient a follows (W = 1; docs/formulations.md, \"The phase field\").",
+           .default_text = "2.5 `cell_size`"},
+          {.name = "mobility", .range = positive, .unit = "1/s",
+           .meaning = "Mobility of the Allen–Cahn equation ∂φ/∂t + v·∇φ = M_φ (a² ∇²φ + 4 W φ (1 − φ)(φ − ½)) "
+                      "with W = 1: M_φ W, the rate at which the interface relaxes to its profile.",
+           .default_text = "`500`"},
       }};
   return t;
 }
@@ -655,7 +655,7 @@ const Table& initialisation_table() {
            .meaning = "Material parameters in place of the scene's while the phase runs, by material name: "
                       "`{\"sand\": {\"cohesion\": 1e5}}` (e.g. a large cohesion while gravity grows, c = 0 from "
                       "t = 0, as seed 004 does). Only the parameters of the material's constitutive model "
-                      "(elasticity, strength, Nor-Sand tables); every formulation.",
+                      "(elasticity, strength, Nor-Sand tables); every formulation but mpm-fem, which refuses it for now.",
            .type_text = "object of objects", .expect = "an object of objects: material name -> {parameter: number}",
            .allowed = "solid materials' model parameters", .default_text = "none",
            .check = check_phase_materials},

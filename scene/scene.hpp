@@ -185,9 +185,9 @@ struct Air {
 /// mpm-fem (seed 004): the Allen–Cahn phase field phi (1 water, 0 air) that carries the water's
 /// free surface on the grid. Absent values are the solver's to choose.
 struct PhaseField {
-  std::optional<double> interface_width;  // m, the diffuse interface's width; absent: 1.5 cells
-  std::optional<double> mobility;         // m^3/(J s), M_phi of seed 004's Allen–Cahn equation
-                                          // (dF/dphi in J/m^3); absent: the solver's
+  std::optional<double> interface_width;  // m, the interface's 5 %-95 % width; absent: the solver's (2.5 cells)
+  std::optional<double> mobility;         // 1/s, M_phi W of seed 004's Allen–Cahn equation with the barrier
+                                          // height W = 1: the interface's relaxation rate; absent: the solver's (500)
 };
 
 struct Solver {

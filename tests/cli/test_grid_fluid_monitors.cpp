@@ -13,7 +13,6 @@
 
 #include "postprocess/postprocess.hpp"
 #include "preprocess/preprocess.hpp"
-#include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 #include "solver/formulation.hpp"
 #include "solver/run.hpp"
@@ -68,19 +67,11 @@ class GridFluid : public Formulation<2> {
   double t_ = 0.0;  // s, the end of the last step
 };
 
-/// The run directory preprocess would write for `scene` (scene.json, particles/solid.vtu,
-/// particles/phase_field.vtu). preprocess itself refuses mpm-fem until its solver is in (the
-/// row's `implemented`), so the test writes the same files from seed_phases.
+/// Preprocesses `scene` (scene.json, particles/solid.vtu, particles/phase_field.vtu).
 std::string write_run_directory(const json& scene, const std::string& name) {
-  const fs::path dir = swmpm::testing::scratch(name) / "run";
-  fs::create_directories(dir / "particles");
-  const swmpm::scene::Scene s = swmpm::scene::parse_scene(scene, "scene.json");
-  std::ofstream(dir / "scene.json") << swmpm::scene::to_json(s).dump(2);
-  const swmpm::pre::Phases phases = swmpm::pre::seed_phases(s);
-  swmpm::scene::write_vtu((dir / "particles" / "solid.vtu").string(), phases.solid);
-  swmpm::scene::write_lattice_vtu((dir / "particles" / "phase_field.vtu").string(), phases.phase_field.nodes,
-                                  phases.phase_field.lattice);
-  return dir.string();
+  const fs::path dir = swmpm::testing::scratch(name);
+  std::ofstream(dir / "scene.json") << scene.dump(2);
+  return swmpm::pre::preprocess((dir / "scene.json").string(), (dir / "run").string(), true);
 }
 
 json probed_scene() {

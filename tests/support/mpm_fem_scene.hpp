@@ -1,5 +1,6 @@
 // A small mpm-fem scene (seed 004's layout): a saturated bed of beads (Mohr–Coulomb, Kozeny–Carman
-// D50) under a pond of free water, in a 2D grid of 0.05 m quadratic B-spline cells with air above.
+// D50) under a pond of free water (incompressible: no bulk_modulus), in a 2D grid of 0.05 m
+// quadratic B-spline cells with air above.
 // The bed is 0.1 m deep, the pond 0.2 m, both 0.4 m wide; the grid 0.4 m x 0.5 m. Shared by the
 // parse tests of mpm-fem's keys (unit), preprocess's phase field (unit) and the grid-fluid monitors
 // (cli).
@@ -16,7 +17,7 @@ inline nlohmann::json mpm_fem_scene() {
     "materials": [
       { "name": "beads", "model": "mohr-coulomb", "grain_density": 2650, "porosity": 0.4, "youngs_modulus": 1e6,
         "poisson_ratio": 0.3, "friction_angle": 30, "grain_diameter": 0.003 },
-      { "name": "water", "model": "fluid", "density": 1000, "bulk_modulus": 2.2e9 } ],
+      { "name": "water", "model": "fluid", "density": 1000 } ],
     "bodies": [
       { "name": "bed", "geometry": { "type": "box", "min": [0, 0], "max": [0.4, 0.1] }, "solid": "beads", "fluid": "water" },
       { "name": "pond", "geometry": { "type": "box", "min": [0, 0.1], "max": [0.4, 0.3] }, "fluid": "water" } ],
