@@ -245,8 +245,8 @@ Phases seed_phases(const scene::Scene& s) {
   std::vector<BodyContent> content;
   for (std::size_t b = 0; b < s.bodies.size(); ++b) content.push_back(body_content(s, b));
   reject_free_water(s, content, w);
-  // Free water stays in the points even where it is not written (mpm-fem): it still loads the
-  // soil below it and takes its place where bodies overlap.
+  // Free water stays in the points even where it is not written as particles (mpm-fem): it still
+  // loads the soil below it, takes its place where bodies overlap, and makes the phase field.
   // Built and checked once (files read, named surfaces present).
   const std::vector<std::unique_ptr<Shape>> shapes = make_shapes(s);
   const std::vector<SeedPoint> points = seed_points(s, shapes);
@@ -256,11 +256,14 @@ Phases seed_phases(const scene::Scene& s) {
   out.solid = solid_cloud(s, points, content, init, w);
   if (w.fluid_particles) out.fluid = fluid_cloud(s, points, content, init);
   out.surfaces = surface_samples(s, shapes);
-  if (w.free_water_on_grid)
+  if (w.free_water_on_grid) {
+    out.phase_field = initial_phase_field(s, points);
     for (std::size_t b = 0; b < s.bodies.size(); ++b)
       if (!content[b].has_solid())
         out.notes.push_back("body \"" + s.bodies[b].name + "\" is free water: " + scene::to_string(s.formulation) +
-                            " models it on the grid, so no particles are written for it");
+                            " models it on the grid, so no particles are written for it; its water is in the "
+                            "initial phase field, particles/phase_field.vtu");
+  }
   return out;
 }
 
@@ -362,6 +365,14 @@ std::string preprocess(const std::string& scene_path, const std::string& out_dir
       if (!quiet)
         std::cout << "preprocess: " << cloud->size() << " " << (phase == std::string("surfaces") ? "named-surface samples" : std::string(phase) + " particles")
                   << (phase == std::string("solid") && pore_fluid_on_solid ? " (with their pore fluid)" : "") << " -> "
+                  << (run / file).string() << "\n";
+    }
+    if (phases.phase_field.nodes.size() > 0) {  // mpm-fem: the water on the grid's nodes
+      const std::string file = "particles/phase_field.vtu";
+      run.claim(file);
+      scene::write_lattice_vtu((run / file).string(), phases.phase_field.nodes, phases.phase_field.lattice);
+      if (!quiet)
+        std::cout << "preprocess: phase field phi on " << phases.phase_field.nodes.size() << " grid nodes -> "
                   << (run / file).string() << "\n";
     }
   } catch (const files::WriteError&) {

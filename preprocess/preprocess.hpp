@@ -4,6 +4,7 @@
 // phase the formulation needs (docs/architecture.md, "Preprocess in detail").
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -34,11 +35,33 @@ std::vector<SeedPoint> seed_points(const scene::Scene& s, const std::vector<std:
 /// Empty when the scene names no surface.
 scene::PointCloud surface_samples(const scene::Scene& s, const std::vector<std::unique_ptr<Shape>>& shapes);
 
+/// mpm-fem's initial phase field (particles/phase_field.vtu): the solver's grid nodes for the
+/// scene's shape function (scene_grid, solver/grid/grid.hpp: positions and flat order, x fastest)
+/// with the array `phi`, the water's volume fraction at each node (1 water, 0 air):
+///
+///     phi_I = min(1, sum_p integral_{Omega_p} N_I dOmega / integral N_I dOmega)
+///
+/// over the water-bearing points p: N the scene's basis functions, Omega_p the point's domain (the
+/// box of side `spacing` around x_p, its whole volume V_p = spacing^dim: saturated soil is water
+/// between the grains; integrated exactly, phase_field.cpp), the denominator over the grid
+/// (porous::basis_integral). So phi_I = 1 wherever node I's support is full of water, walls
+/// included, and sum_I phi_I integral N_I is the water's volume where no node is over-full. Water-bearing
+/// are the points of bodies with a fluid (free water, saturated soil) and those of dry bodies that
+/// lie below the water on their vertical line: below the top y_q + l_q of the highest
+/// water-bearing point q within half a cell in x (and z in 3D), h/2 widened by 1e-9 of itself as
+/// the water_level gauge does: pores below the water are full of it.
+struct InitialPhaseField {
+  scene::PointCloud nodes;          // the grid's nodes, array `phi`
+  std::array<int, 3> lattice{1, 1, 1};  // nodes per axis (1 for the axis a 2D grid lacks)
+};
+InitialPhaseField initial_phase_field(const scene::Scene& s, const std::vector<SeedPoint>& points);
+
 /// The particle sets of a scene, as written to particles/<phase>.vtu. An empty set is not written.
 struct Phases {
   scene::PointCloud solid;  // skeleton particles (single-point sets also carry the pore fluid)
   scene::PointCloud fluid;  // double-point pore fluid and free water
   scene::PointCloud surfaces;  // named-surface samples (surface_samples)
+  InitialPhaseField phase_field;   // mpm-fem: the water on the grid (empty otherwise)
   std::vector<std::string> notes;  // what was left out on purpose and why, for the log
 };
 

@@ -261,7 +261,8 @@ std::vector<std::string> swmpm_files_in(const fs::path& dir) {
     if (fs::exists(fs::symlink_status(dir / rel, ec))) out.push_back(rel);
   };
   for (const char* top : {"scene.json", "run.json", "log.txt", "monitors.csv", "report.md", "particles/solid.vtu",
-                          "particles/fluid.vtu", "particles/surfaces.vtu", "output/results.pvd"})
+                          "particles/fluid.vtu", "particles/surfaces.vtu", "particles/phase_field.vtu",
+                          "output/results.pvd"})
     add(top);
   if (fs::is_directory(dir / "output", ec))
     for (const auto& e : fs::directory_iterator(dir / "output", ec))

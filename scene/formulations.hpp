@@ -47,6 +47,11 @@ struct FormulationRow {
   /// Material keys only some formulations read (e.g. `grain_diameter`): a scene whose formulation
   /// does not list a key it gives is refused, naming who reads it.
   std::vector<std::string> material_keys = {};
+  /// Other keys only some formulations read, as JSON paths (e.g. `/solver/air`): a scene that gives
+  /// one its formulation does not list is refused, naming who reads it; to_json writes them for
+  /// the formulations that list them only.
+  std::vector<std::string> keys = {};
+  bool reads(const std::string& path) const;
 
   /// This formulation's entry for a switch path, or nullptr when it does not read it.
   const Switch* find(const std::string& path) const;

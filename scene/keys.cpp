@@ -148,10 +148,11 @@ const Table& solid_table() {
                       "initial n0 and k0), or with the volume ratio (`xie-leo`: k = k0 J², J = (1 − n0)/(1 − n), the law "
                       "behind Xie & Leo's large-strain consolidation closed form)."},
           {.name = "grain_diameter", .range = positive, .unit = "m",
-           .meaning = "explicit-double-point: reference grain diameter D; the intrinsic permeability is then Kozeny–Carman's "
-                      "κ = D² n³ / (A (1 − n)²) (seed 003 eq. 11, A = `ergun_a`), at the current porosity with "
-                      "`permeability_law` `kozeny-carman`, at the initial one with `constant` (instead of "
-                      "`hydraulic_conductivity` / `intrinsic_permeability`)."},
+           .meaning = "explicit-double-point, mpm-fem: reference grain diameter D (seed 004: D50); the intrinsic "
+                      "permeability is then Kozeny–Carman's κ = D² n³ / (A (1 − n)²) (seed 003 eq. 11, seed 004; A = "
+                      "`ergun_a`, 150 in both seeds), at the current porosity with `permeability_law` "
+                      "`kozeny-carman`, at the initial one with `constant` (instead of `hydraulic_conductivity` / "
+                      "`intrinsic_permeability`)."},
           {.name = "ergun_a", .def = 150.0, .range = positive, .unit = "-",
            .meaning = "explicit-double-point: Ergun's constant A of the viscous term (and of Kozeny–Carman), seed 003 eqs. 10–11."},
           {.name = "ergun_b", .def = 1.75, .range = non_negative, .unit = "-",
@@ -536,7 +537,8 @@ const Table& monitor_table() {
            .meaning = "Which phase's particle (`fluid` needs a fluid in the scene). In the double-point formulations "
                       "every point monitor follows a soil point, whatever `phase` says: the soil points carry the "
                       "water's pore pressure and velocity interpolated from the water points (docs/architecture.md), "
-                      "and the log names the soil particle followed."},
+                      "and the log names the soil particle followed. In mpm-fem a `fluid` monitor with `at` is an "
+                      "Eulerian probe: it reads the grid's fluid at that fixed point (`pore_pressure`, `velocity_*`)."},
           {.name = "points", .type = Type::choice, .def = "soil", .values = {"soil", "water"},
            .meaning = "Which particle set a point monitor follows: `water` follows a water point of a double-point "
                       "formulation (`at`: the nearest at t = 0, or `particle`: its id), e.g. one at a free surface, "
@@ -586,6 +588,41 @@ const Table& solver_table() {
            .meaning = "Steps between in-memory snapshots of the last good state."},
           {.name = "stabilisation", .type = Type::object,
            .meaning = "See [stabilisation](#stabilisation).", .default_text = "all defaults"},
+          {.name = "air", .type = Type::object,
+           .meaning = "mpm-fem only: the air above the water, see [air](#air).", .default_text = "all defaults"},
+          {.name = "phase_field", .type = Type::object,
+           .meaning = "mpm-fem only: the phase field of the water's free surface, see [phase field](#phase-field).",
+           .default_text = "all defaults"},
+      }};
+  return t;
+}
+
+const Table& air_table() {
+  static const Table t{
+      "Air", "`solver.air` (mpm-fem only)",
+      {
+          {.name = "density", .def = 1.2, .range = positive, .unit = "kg/m^3",
+           .meaning = "Density ρ_g of the air, the fluid where the phase field φ = 0; the fluid's density is "
+                      "φ ρ_w + (1 − φ) ρ_g (seed 004)."},
+          {.name = "dynamic_viscosity", .def = 1.8e-5, .range = positive, .unit = "Pa s",
+           .meaning = "Dynamic viscosity μ_g of the air; the fluid's is φ μ_w + (1 − φ) μ_g (seed 004)."},
+      }};
+  return t;
+}
+
+const Table& phase_field_table() {
+  static const Table t{
+      "Phase field", "`solver.phase_field` (mpm-fem only)",
+      {
+          {.name = "interface_width", .range = positive, .unit = "m",
+           .meaning = "Width of the diffuse water–air interface of the Allen–Cahn phase field φ (1 water, 0 air; "
+                      "seed 004), from φ = 0.05 to 0.95: 2.944 δ of the planar profile (1 + tanh(x/δ))/2, from "
+                      "which the gradient coefficient a follows (W = 1; docs/formulations.md, \"The phase field\").",
+           .default_text = "2.5 `cell_size`"},
+          {.name = "mobility", .range = positive, .unit = "1/s",
+           .meaning = "Mobility of the Allen–Cahn equation ∂φ/∂t + v·∇φ = M_φ (a² ∇²φ + 4 W φ (1 − φ)(φ − ½)) "
+                      "with W = 1: M_φ W, the rate at which the interface relaxes to its profile.",
+           .default_text = "`500`"},
       }};
   return t;
 }
@@ -614,6 +651,14 @@ const Table& initialisation_table() {
            .meaning = "Local damping during the phase.", .default_text = "`solver.damping`"},
           {.name = "reset_displacement", .type = Type::boolean, .def = true,
            .meaning = "Displacements (frames, monitors) are measured from the state at t = 0."},
+          {.name = "materials", .type = Type::custom, .unit = "as the parameters",
+           .meaning = "Material parameters in place of the scene's while the phase runs, by material name: "
+                      "`{\"sand\": {\"cohesion\": 1e5}}` (e.g. a large cohesion while gravity grows, c = 0 from "
+                      "t = 0, as seed 004 does). Only the parameters of the material's constitutive model "
+                      "(elasticity, strength, Nor-Sand tables); every formulation but mpm-fem, which refuses it for now.",
+           .type_text = "object of objects", .expect = "an object of objects: material name -> {parameter: number}",
+           .allowed = "solid materials' model parameters", .default_text = "none",
+           .check = check_phase_materials},
       }};
   return t;
 }
@@ -654,7 +699,7 @@ std::vector<const Table*> all_tables() {
           &slope_table(),     &footing_table(),  &gmsh_table(),      &surface_mesh_table(),
           &initial_table(),   &boundary_table(), &load_table(),      &region_table(),
           &time_table(),      &output_table(),   &monitor_table(),   &solver_table(),
-          &stabilisation_table(), &initialisation_table()};
+          &stabilisation_table(), &air_table(),   &phase_field_table(), &initialisation_table()};
 }
 
 std::vector<const Table*> model_tables(MaterialModel m) {
@@ -665,6 +710,18 @@ std::vector<const Table*> model_tables(MaterialModel m) {
     case MaterialModel::drucker_prager: return {&solid_table(), &elastic_table(), &strength_table()};
     case MaterialModel::nor_sand: return {&solid_table(), &nor_sand_table()};
     case MaterialModel::fluid: return {&fluid_table()};
+  }
+  return {};
+}
+
+std::vector<const Table*> constitutive_tables(MaterialModel m) {
+  switch (m) {
+    case MaterialModel::linear_elastic:
+    case MaterialModel::hencky: return {&elastic_table()};
+    case MaterialModel::mohr_coulomb:
+    case MaterialModel::drucker_prager: return {&elastic_table(), &strength_table()};
+    case MaterialModel::nor_sand: return {&nor_sand_table()};
+    case MaterialModel::fluid: return {};
   }
   return {};
 }

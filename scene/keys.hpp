@@ -88,6 +88,11 @@ const Table& monitor_table();
 const Table& solver_table();
 const Table& initialisation_table();
 const Table& stabilisation_table();
+const Table& air_table();
+const Table& phase_field_table();
+/// The tables of the parameters a material model's constitutive law reads (elasticity, strength,
+/// Nor-Sand; none for a fluid): what initialisation.materials may override.
+std::vector<const Table*> constitutive_tables(MaterialModel m);
 
 /// Every table, in the order of the reference.
 std::vector<const Table*> all_tables();

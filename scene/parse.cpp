@@ -47,10 +47,12 @@ Scene SceneParser::parse() {
   for (const auto& at : water_monitors_)
     if (s_.formulation != Formulation::automatic && !row_of(s_.formulation).water.fluid_particles)
       c_.error(at, "got \"water\", but only the double-point formulations have water points; expected \"soil\"");
-  if (s_.formulation != Formulation::automatic && s_.has_fluid() && !row_of(s_.formulation).water.fluid_particles) {
-    std::vector<std::string> readers;  // formulations with liquid points
+  // A water_level gauge reads the liquid points (double-point) or the grid's phase field (mpm-fem).
+  const auto has_liquid = [](const WaterLayout& w) { return w.fluid_particles || w.free_water_on_grid; };
+  if (s_.formulation != Formulation::automatic && s_.has_fluid() && !has_liquid(row_of(s_.formulation).water)) {
+    std::vector<std::string> readers;  // formulations with liquid points or a grid fluid
     for (const FormulationRow& r : formulation_rows())
-      if (r.implemented && r.water.fluid_particles) readers.push_back(r.name);
+      if (r.implemented && has_liquid(r.water)) readers.push_back(r.name);
     for (const auto& at : gauges_)
       c_.error(at, "got \"water_level\", but formulation " + in_quotes(to_string(s_.formulation)) +
                        " has no liquid points; expected a formulation that reads it: " + join(readers));
@@ -567,6 +569,14 @@ void SceneParser::parse_solver(const json& j, const std::string& path) {
   sv.stabilisation.pressure = st.str("pressure", "");  // "": the formulation's default (default_pressure_stabilisation)
   sv.stabilisation.fbar = st.str("fbar", "none");
   sv.stabilisation.fbar_patch = st.num("fbar_patch", 0.0);  // 0: by shape function, resolved in parse()
+  // mpm-fem's air and phase field (refused in the other formulations by their rows, parse()).
+  const Obj air = check_object(c_, o.ok("air") ? o.get("air") : json::object(), o.at("air"), {&air_table()});
+  sv.air.density = air.num("density", sv.air.density);
+  sv.air.dynamic_viscosity = air.num("dynamic_viscosity", sv.air.dynamic_viscosity);
+  const Obj pf = check_object(c_, o.ok("phase_field") ? o.get("phase_field") : json::object(), o.at("phase_field"),
+                              {&phase_field_table()});
+  if (pf.ok("interface_width")) sv.phase_field.interface_width = pf.num("interface_width");
+  if (pf.ok("mobility")) sv.phase_field.mobility = pf.num("mobility");
 }
 
 void SceneParser::parse_initialisation(const json& j, const std::string& path, const Obj& top) {
@@ -588,6 +598,70 @@ void SceneParser::parse_initialisation(const json& j, const std::string& path, c
                                          "(gravity is full from t = 0; ramp it with initialisation.gravity_ramp)");
   if (o.has("hydraulic_conductivity") && !s_.has_fluid())
     c_.error(o.at("hydraulic_conductivity"), "got a value, but no body has a fluid; remove the key");
+  if (o.ok("materials")) parse_phase_materials(o.get("materials"), o.at("materials"));
+}
+
+/// initialisation.materials: each name a solid material of the scene, each key a parameter of
+/// that material's constitutive model, range-checked as in the material's own tables (none
+/// required: a parameter the phase does not give keeps the scene's value); the rules across keys
+/// hold for the parameters the phase runs with.
+void SceneParser::parse_phase_materials(const json& j, const std::string& path) {
+  for (const auto& [name, value] : j.items()) {
+    const std::string p = path + "/" + escape(name);
+    const int idx = s_.material_index(name);
+    if (idx < 0) {
+      const std::vector<std::string> solids = material_names(false);
+      c_.error(p, "got material " + in_quotes(name) + ", but no material has that name; expected a solid material "
+                  "(defined: " + (solids.empty() ? std::string("none") : join(solids)) + ")" + did_you_mean(name, solids));
+      continue;
+    }
+    const Material& m = s_.materials[static_cast<std::size_t>(idx)];
+    if (!material_info_[static_cast<std::size_t>(idx)].known) continue;  // its model is reported with it
+    const std::vector<const Table*> own = constitutive_tables(m.model);
+    if (own.empty()) {
+      c_.error(p, "got material " + in_quotes(name) + ", a fluid; expected a solid material (the phase changes the "
+                  "parameters of constitutive models only)");
+      continue;
+    }
+    // The model's tables with nothing required and no defaults.
+    std::vector<Table> optional;
+    for (const Table* t : own) {
+      optional.push_back(*t);
+      for (Key& k : optional.back().keys) k.required = false, k.def = nullptr;
+    }
+    std::vector<const Table*> tables;
+    for (const Table& t : optional) tables.push_back(&t);
+    // The material's other keys (density, porosity, permeability: read by preprocess and the
+    // formulations, not by the model) are named as such rather than as unknown.
+    json given = value;
+    std::vector<std::string> parameters;
+    for (const Table* t : own)
+      for (const Key& k : t->keys) parameters.push_back(k.name);
+    for (const Table* t : model_tables(m.model))
+      for (const Key& k : t->keys)
+        if (given.contains(k.name) && !contains(parameters, k.name)) {
+          c_.error(p + "/" + escape(k.name), "got " + in_quotes(k.name) + ", which " + to_string(m.model) +
+                                                 "'s constitutive model does not read (it is fixed at t0 by preprocess "
+                                                 "or read by the formulation); expected one of: " + join(parameters));
+          given.erase(k.name);
+        }
+    const Obj o = check_object(c_, given, p, tables);
+    Material phase = m;
+    for (const auto& [key, v] : o.v) {
+      phase.params[key] = v.get<double>();
+      s_.initialisation.materials[name][key] = v.get<double>();
+    }
+    if (phase.has("friction_angle") && phase.has("dilation_angle") &&
+        phase.at("dilation_angle") > phase.at("friction_angle"))
+      c_.error(o.at(o.ok("dilation_angle") ? "dilation_angle" : "friction_angle"),
+               "got dilation_angle " + fmt_g(phase.at("dilation_angle")) + " > friction_angle " +
+                   fmt_g(phase.at("friction_angle")) + " during the phase, expected dilation_angle <= friction_angle [deg]");
+    if (phase.has("dilatancy_cutoff_start") && phase.has("dilatancy_cutoff_end") &&
+        phase.at("dilatancy_cutoff_end") < phase.at("dilatancy_cutoff_start"))
+      c_.error(o.at(o.ok("dilatancy_cutoff_end") ? "dilatancy_cutoff_end" : "dilatancy_cutoff_start"),
+               "got dilatancy_cutoff_end " + fmt_g(phase.at("dilatancy_cutoff_end")) + " < dilatancy_cutoff_start " +
+                   fmt_g(phase.at("dilatancy_cutoff_start")) + " during the phase, expected end >= start [-]");
+  }
 }
 
 // -- formulation ----------------------------------------------------------------------------------

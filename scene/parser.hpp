@@ -99,6 +99,7 @@ class SceneParser {
   void check_quantity(const std::string& q, bool global, const std::string& path);
   void parse_solver(const json& j, const std::string& path);
   void parse_initialisation(const json& j, const std::string& path, const Obj& top);
+  void parse_phase_materials(const json& j, const std::string& path);
   void resolve_formulation(const std::string& name, const std::string& path);
 };
 

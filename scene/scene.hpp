@@ -175,6 +175,21 @@ struct Stabilisation {
 /// cell-wise (1) for linear and GIMP, patch-wise 1.5 for the B-splines.
 double default_fbar_patch(ShapeFunction f);
 
+/// mpm-fem (seed 004): the air of the fluid phase above the water's free surface, a second
+/// Newtonian fluid on the grid mixed with the water by the phase field.
+struct Air {
+  double density = 1.2;              // kg/m^3
+  double dynamic_viscosity = 1.8e-5;  // Pa s
+};
+
+/// mpm-fem (seed 004): the Allen–Cahn phase field phi (1 water, 0 air) that carries the water's
+/// free surface on the grid. Absent values are the solver's to choose.
+struct PhaseField {
+  std::optional<double> interface_width;  // m, the interface's 5 %-95 % width; absent: the solver's (2.5 cells)
+  std::optional<double> mobility;         // 1/s, M_phi W of seed 004's Allen–Cahn equation with the barrier
+                                          // height W = 1: the interface's relaxation rate; absent: the solver's (500)
+};
+
 struct Solver {
   double flip = 0.99;            // FLIP fraction of the FLIP/PIC blend (1 = pure FLIP)
   double damping = 0.0;          // local (Cundall) damping coefficient, 0..1
@@ -190,6 +205,8 @@ struct Solver {
   std::string drag;  // explicit-double-point: darcy | ergun ("" until parse resolves it by formulation)
   Stabilisation stabilisation;
   int checkpoint_every = 50;     // steps between in-memory snapshots of the last good state
+  Air air;                       // mpm-fem: the gas above the water's free surface
+  PhaseField phase_field;        // mpm-fem: the Allen–Cahn phase field phi (1 water, 0 air)
 };
 
 /// An initialisation phase before the analysis (seed 001 App. B.4): t runs from -duration to 0
@@ -204,6 +221,10 @@ struct Initialisation {
   bool tie_water = true;      // double-point: water points follow their coincident soil points
   std::optional<double> damping;  // local damping during the phase (default solver.damping)
   bool reset_displacement = true;  // displacements are measured from the state at t = 0
+  /// Material parameters in place of the scene's while the phase runs (seed 004: a large cohesion
+  /// while gravity grows, c = 0 from t = 0): material name -> parameter name -> value, only the
+  /// parameters of the material's constitutive model (units as in the material tables).
+  std::map<std::string, std::map<std::string, double>> materials;
   bool enabled() const { return duration > 0.0; }
 };
 

@@ -403,6 +403,21 @@ bool check_parameters(Ctx& c, const json& v, const std::string& path, const Key&
   return ok;
 }
 
+bool check_phase_materials(Ctx& c, const json& v, const std::string& path, const Key& k) {
+  if (!v.is_object()) {
+    report(c, v, path, k);
+    return false;
+  }
+  bool ok = true;
+  for (const auto& [name, value] : v.items())
+    if (!value.is_object()) {
+      c.error(path + "/" + escape(name), "got " + shown(value) + ", expected an object of material " +
+                                             in_quotes(name) + "'s parameters, e.g. {\"cohesion\": 1e5}");
+      ok = false;
+    }
+  return ok;
+}
+
 // ------------------------------------------------------------------------------------------------
 // Checking one object against its tables.
 // ------------------------------------------------------------------------------------------------
@@ -411,8 +426,8 @@ namespace {
 
 bool check_value(Ctx& c, const Key& k, const json& v, const std::string& path) {
   switch (k.type) {
-    case Type::number:
-      if (v.is_number() && k.range.contains(v.get<double>())) return true;
+    case Type::number:  // finite: a number too large for a double (1e400) reads as infinity
+      if (v.is_number() && std::isfinite(v.get<double>()) && k.range.contains(v.get<double>())) return true;
       break;
     case Type::integer:
       if (is_integral(v) && k.range.contains(v.get<double>())) return true;

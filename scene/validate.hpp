@@ -155,6 +155,9 @@ bool check_file(Ctx& c, const json& v, const std::string& path, const Key& k);
 /// gmsh parameters: {"name": number}, names usable as .geo variables (they are written into a .geo
 /// prelude, so nothing else may get through).
 bool check_parameters(Ctx& c, const json& v, const std::string& path, const Key& k);
+/// initialisation.materials: an object of objects (material name -> its parameters); the names and
+/// parameters are checked against the scene's materials by the parser (parse_initialisation).
+bool check_phase_materials(Ctx& c, const json& v, const std::string& path, const Key& k);
 
 // ------------------------------------------------------------------------------------------------
 // Checking one object against its tables.

@@ -160,6 +160,7 @@ nlohmann::json to_json(const Scene& s) {
     if (in.hydraulic_conductivity) ij["hydraulic_conductivity"] = *in.hydraulic_conductivity;
     if (in.damping) ij["damping"] = *in.damping;
     if (row_of(s.formulation).find("/initialisation/tie_water")) ij["tie_water"] = in.tie_water;
+    if (!in.materials.empty()) ij["materials"] = in.materials;  // name -> {parameter: value}
     j["initialisation"] = ij;
   }
 
@@ -202,6 +203,14 @@ nlohmann::json to_json(const Scene& s) {
   if (row.find("/solver/escaped_water")) j["solver"]["escaped_water"] = sv.escaped_water;
   if (row.find("/solver/drag_integration")) j["solver"]["drag_integration"] = sv.drag_integration;
   if (row.find("/solver/drag")) j["solver"]["drag"] = sv.drag;
+  if (row.reads("/solver/air"))
+    j["solver"]["air"] = {{"density", sv.air.density}, {"dynamic_viscosity", sv.air.dynamic_viscosity}};
+  if (row.reads("/solver/phase_field")) {  // an absent value stays absent: the solver's choice
+    json pf = json::object();
+    if (sv.phase_field.interface_width) pf["interface_width"] = *sv.phase_field.interface_width;
+    if (sv.phase_field.mobility) pf["mobility"] = *sv.phase_field.mobility;
+    j["solver"]["phase_field"] = pf;
+  }
   return j;
 }
 

@@ -134,9 +134,10 @@ class Formulation {
   /// Power of body forces and tractions [W or W/m] at the state, with the loads of ctx.
   virtual double external_power(const State<Dim>& s, const StepContext& ctx) const = 0;
   /// The initialisation phase (scene.initialisation) starts (`phase` set) or ends (nullptr):
-  /// plastic flow off or on in the material models, the phase's permeability and damping in
-  /// place of the scene's, and (double-point) the water points tied to their soil points.
-  /// Called between steps by the time loop.
+  /// the phase's material parameters (initialisation.materials) and plastic flow off or on in the
+  /// material models (PhaseMaterials::set, materials/material.hpp), the phase's permeability and
+  /// damping in place of the scene's, and (double-point) the water points tied to their soil
+  /// points. Called between steps by the time loop.
   virtual void set_initialisation(State<Dim>& s, const scene::Initialisation* phase) = 0;
   /// Cells holding at least one particle, at the last step.
   virtual std::size_t active_cells(const State<Dim>& s) const = 0;

@@ -30,6 +30,7 @@
 #include "solver/output/checkpoint.hpp"
 #include "solver/output/monitors.hpp"
 #include "solver/output/particle_io.hpp"
+#include "solver/shape/shape.hpp"
 #include "swmpm/version.hpp"
 
 namespace fs = std::filesystem;
@@ -321,10 +322,15 @@ class Runner {
     scene_text_ = read_text(dir_ / "scene.json");  // what checkpoints record, read once
     clock_ = Clock(scene_);
     const fs::path particles = dir_ / "particles" / "solid.vtu";
-    // A double-point scene of free water only (a dam break) has no solid points: preprocess
-    // writes no particles/solid.vtu, and the solid set is empty (with its pore-fluid fields).
-    const bool water_points = scene::row_of(scene_.formulation).water.fluid_particles;
-    if (water_points && !fs::exists(particles) && fs::exists(dir_ / "particles" / "fluid.vtu")) state_.solid.add_fluid();
+    const fs::path phase_field = dir_ / "particles" / "phase_field.vtu";
+    // A scene of free water only (a dam break) has no solid points: preprocess writes no
+    // particles/solid.vtu, and the solid set is empty (with its pore-fluid fields). The water is
+    // in particles/fluid.vtu (double-point) or particles/phase_field.vtu (mpm-fem).
+    const scene::WaterLayout layout = scene::row_of(scene_.formulation).water;
+    const bool water_points = layout.fluid_particles, grid_water = layout.free_water_on_grid;
+    if (!fs::exists(particles) && ((water_points && fs::exists(dir_ / "particles" / "fluid.vtu")) ||
+                                   (grid_water && fs::exists(phase_field))))
+      state_.solid.add_fluid();
     else state_.solid = particles_from_cloud<Dim>(scene::read_vtu(particles.string()), particles.string());
     if (needs_material_state(scene_)) state_.solid.add_material_state();
     state_.index_ids();
@@ -339,6 +345,7 @@ class Runner {
       // explicit-double-point keeps `sigma` on them: the liquid's viscous deviatoric stress.
       state_.fluid.make_water_points(/*keep_stress=*/scene_.formulation == scene::Formulation::explicit_double_point);
     }
+    if (grid_water) load_phase_field(phase_field);
     const fs::path surfaces = dir_ / "particles" / "surfaces.vtu";
     if (!scene::surface_bit_names(scene_).empty()) {
       if (!fs::exists(surfaces))
@@ -353,6 +360,24 @@ class Runner {
     threads_ = omp_get_max_threads();
     // --resume: the checkpoint must be this scene's and this version's.
     if (opt_.resume) resume_ = read_checkpoint(f_->name());
+  }
+
+  /// mpm-fem: the initial phase field preprocess wrote on the grid's nodes (State::phase_field),
+  /// checked against the scene's grid (the node count of its shape function) and for `phi`.
+  void load_phase_field(const fs::path& file) {
+    if (!fs::exists(file))
+      throw std::runtime_error(file.string() + " is missing: " + scene::to_string(scene_.formulation) +
+                               " starts its water from the phase field preprocess writes there; run swmpm preprocess "
+                               "again");
+    state_.phase_field = scene::read_vtu(file.string());
+    const std::size_t nodes = shape::with_policy(scene_.grid.shape_function, [&]<class Shape>() {
+      return scene_grid<Dim>(scene_.grid, Shape::degree, Shape::bspline).num_nodes();
+    });
+    if (state_.phase_field.size() != nodes)
+      throw std::runtime_error(file.string() + ": " + std::to_string(state_.phase_field.size()) + " nodes, but the "
+                               "scene's grid (" + scene::to_string(scene_.grid.shape_function) + ") has " +
+                               std::to_string(nodes) + "; run swmpm preprocess again");
+    state_.phase_field.get("phi", file.string());  // throws naming the file when phi is missing
   }
 
   /// An output interval below the time step would write every step (and one of 1e-20 s made the
@@ -406,7 +431,7 @@ class Runner {
                               ", formulation " + f_->name();
     std::optional<std::size_t> monitor_bytes;
     if (resume_) monitor_bytes = resume_->header.at("loop").at("monitor_bytes").get<std::size_t>();
-    monitors_ = std::make_unique<Monitors<Dim>>(scene_, state_, dir_ / "monitors.csv", stamp, monitor_bytes);
+    monitors_ = std::make_unique<Monitors<Dim>>(scene_, state_, *f_, dir_ / "monitors.csv", stamp, monitor_bytes);
   }
 
   /// The run's first lines in the log: what runs, what each monitor follows, the dt.
@@ -455,6 +480,15 @@ class Runner {
        << " s, " << (init.plasticity ? "plastic flow on" : "elastic (plastic flow off)");
     if (init.hydraulic_conductivity) os << ", k = " << *init.hydraulic_conductivity << " m/s";
     if (init.damping) os << ", damping " << *init.damping;
+    if (!init.materials.empty()) {  // the parameters the models run with instead of the scene's
+      os << ", materials";
+      const char* sep = " ";
+      for (const auto& [name, params] : init.materials) {
+        os << sep << name << ":";
+        for (const auto& [key, value] : params) os << " " << key << " " << value;
+        sep = "; ";
+      }
+    }
     if (state_.fluid.size() && init.tie_water) os << ", water points tied to their soil points";
     log_.line(os.str());
   }

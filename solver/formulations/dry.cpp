@@ -36,6 +36,7 @@ class Dry final : public Formulation<Dim> {
         damping_(s.solver.damping),
         scene_damping_(s.solver.damping),
         materials_(make_materials<Dim>(s)),
+        phase_materials_(s),
         material_particles_(group_by_material(state.solid, s.materials.size())),
         fbar_(s, grid_) {
     nodes_.resize(grid_.num_nodes());
@@ -125,7 +126,7 @@ class Dry final : public Formulation<Dim> {
     return power;
   }
   void set_initialisation(State<Dim>&, const scene::Initialisation* phase) override {
-    set_plastic(materials_, phase == nullptr || phase->plasticity);
+    phase_materials_.set(materials_, phase);  // the phase's parameters and plastic flag (materials/material.hpp)
     damping_ = phase_damping(phase, scene_damping_);
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
@@ -165,6 +166,7 @@ class Dry final : public Formulation<Dim> {
   ParticleLoads<Dim> loads_;
   double flip_, damping_, scene_damping_;
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
+  PhaseMaterials<Dim> phase_materials_;  // initialisation.materials: swapped in by set_initialisation
   std::vector<std::vector<int>> material_particles_;
   NodeFields<Dim> nodes_;
   NodeBox<Dim> box_;

@@ -94,6 +94,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         damping_(s.solver.damping),
         scene_damping_(s.solver.damping),
         materials_(make_materials<Dim>(s)),
+        phase_materials_(s),
         material_particles_(group_by_material(state.solid, s.materials.size())),
         fbar_(s, grid_) {
     if (state.fluid.size() == 0)
@@ -274,7 +275,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
     return power;
   }
   void set_initialisation(State<Dim>& st, const scene::Initialisation* phase) override {
-    set_plastic(materials_, phase == nullptr || phase->plasticity);
+    phase_materials_.set(materials_, phase);  // the phase's parameters and plastic flag (materials/material.hpp)
     damping_ = phase_damping(phase, scene_damping_);
     for (auto& sk : skeleton_)
       sk.perm = phase && phase->hydraulic_conductivity
@@ -669,6 +670,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
   porous::DragLaw drag_;
   double n_max_ = 1.0;  // the smallest maximum_porosity of the scene's skeletons (liquid viscosity)
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
+  PhaseMaterials<Dim> phase_materials_;  // initialisation.materials: swapped in by set_initialisation
   std::vector<std::vector<int>> material_particles_;
   std::vector<std::vector<int>> active_ = std::vector<std::vector<int>>(material_particles_.size());
   std::vector<Liquid> liquid_;      // per material (fluid materials)

@@ -65,6 +65,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
         mfvp_order_(mfvp_order(s.solver.stabilisation.pressure)),
         smoothing_stage_(grid_),
         materials_(make_materials<Dim>(s)),
+        phase_materials_(s),
         material_particles_(group_by_material(state.solid, s.materials.size())),
         fbar_(s, grid_) {
     const auto& pressure = s.solver.stabilisation.pressure;
@@ -215,7 +216,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     return power;
   }
   void set_initialisation(State<Dim>& st, const scene::Initialisation* phase) override {
-    set_plastic(materials_, phase == nullptr || phase->plasticity);
+    phase_materials_.set(materials_, phase);  // the phase's parameters and plastic flag (materials/material.hpp)
     damping_ = phase_damping(phase, scene_damping_);
     for (auto& pf : pore_)
       pf.perm = phase && phase->hydraulic_conductivity
@@ -472,6 +473,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::vector<double> nhat_, flux_;                  // per particle: n^, grad n^ . (v_f - v_s)
   std::vector<Vec<Dim>> grad_n_;                     // per particle: grad n^
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
+  PhaseMaterials<Dim> phase_materials_;  // initialisation.materials: swapped in by set_initialisation
   std::vector<std::vector<int>> material_particles_;
   std::vector<PoreFluid> pore_;  // per solid material
   NodeFields<Dim> solid_, fluid_;

@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "scene/scene.hpp"
 #include "solver/common.hpp"
 
 namespace swmpm {
@@ -178,6 +179,22 @@ Grid<Dim>::Grid(const Vec<Dim>& min, const Vec<Dim>& max, double h, int degree, 
     nodes_[a] = ax.nodes;
     num_nodes_ *= static_cast<std::size_t>(ax.nodes);
   }
+}
+
+/// The grid of a scene's `grid` for basis functions of `degree` (bspline: the clamped B-splines,
+/// nodes at the Greville abscissae; otherwise cell corners): the construction the solver's
+/// formulations (formulations/registry.hpp, make_grid, which also refuses fewer than 2 cells per
+/// axis) and preprocess (the initial phase field of mpm-fem, particles/phase_field.vtu) share,
+/// so that preprocess's nodes are the solver's, in the same flat order. Header-only: preprocess
+/// does not link the solver.
+template <int Dim>
+Grid<Dim> scene_grid(const scene::Grid& g, int degree, bool bspline) {
+  Vec<Dim> lo, hi;
+  for (int a = 0; a < Dim; ++a) {
+    lo[a] = g.min[static_cast<std::size_t>(a)];
+    hi[a] = g.max[static_cast<std::size_t>(a)];
+  }
+  return Grid<Dim>(lo, hi, g.cell_size, degree, bspline);
 }
 
 }  // namespace swmpm

@@ -20,6 +20,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "scene/scene.hpp"
@@ -91,6 +92,52 @@ void for_each_id(std::span<const int> ids, Fn&& fn) {
 /// formulations cannot run yet.
 template <int Dim>
 std::unique_ptr<MaterialModel<Dim>> make_material(const scene::Material& m, const scene::Scene& s);
+
+/// The initialisation phase's material models, for every formulation (scene.initialisation.materials:
+/// parameters in place of the scene's while the phase runs, e.g. seed 004's large cohesion while
+/// gravity grows and c = 0 from t = 0). A formulation holds its models as make_materials
+/// (formulations/registry.hpp) builds them, one per scene material (nullptr for a fluid), and one
+/// of these beside them: built with the formulation, it holds the models of the materials the phase
+/// overrides, made from the scene's parameters with the phase's in place (the same factory,
+/// make_material). set(), called by every Formulation::set_initialisation, swaps them into the
+/// models' places when the phase starts (the scene's wait here) and back when it ends; then it
+/// turns plastic flow off during the phase unless phase->plasticity, in the models in use and in
+/// those aside alike, so that what a model remembers of the phase (Nor-Sand: after an elastic
+/// phase π_i is set from p alone) is the same whichever of the two runs next.
+/// A swap loses nothing: the models keep no per-particle state of their own (Nor-Sand's π_i, Ē_d^p,
+/// ψ_start live in ParticleSet::state; a model holds its parameters and the plastic flags), and
+/// --resume, which replays set_initialisation as the run went, swaps as the run did.
+template <int Dim>
+class PhaseMaterials {
+ public:
+  PhaseMaterials() = default;
+  explicit PhaseMaterials(const scene::Scene& s) : aside_(s.materials.size()) {
+    for (std::size_t k = 0; k < s.materials.size(); ++k) {
+      const auto it = s.initialisation.materials.find(s.materials[k].name);
+      if (it == s.initialisation.materials.end()) continue;
+      scene::Material m = s.materials[k];
+      for (const auto& [key, value] : it->second) m.params[key] = value;
+      aside_[k] = make_material<Dim>(m, s);
+    }
+  }
+  /// The phase starts (`phase` = &scene.initialisation) or ends (nullptr) for `models` (indexed
+  /// as the scene's materials). Calling it again for the same phase changes nothing.
+  void set(std::vector<std::unique_ptr<MaterialModel<Dim>>>& models, const scene::Initialisation* phase) {
+    if ((phase != nullptr) != in_phase_) {
+      for (std::size_t k = 0; k < aside_.size() && k < models.size(); ++k)
+        if (aside_[k]) std::swap(models[k], aside_[k]);
+      in_phase_ = phase != nullptr;
+    }
+    const bool plastic = phase == nullptr || phase->plasticity;
+    for (auto* group : {&models, &aside_})
+      for (auto& m : *group)
+        if (m) m->set_plastic(plastic);
+  }
+
+ private:
+  std::vector<std::unique_ptr<MaterialModel<Dim>>> aside_;  // per material: the models not in use, or nullptr
+  bool in_phase_ = false;                                   // the phase's models are in use
+};
 
 /// True when a material of the scene keeps internal variables in ParticleSet::state (nor-sand):
 /// the particle set must then carry them (ParticleSet::add_material_state) before the first step.

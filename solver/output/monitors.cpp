@@ -12,8 +12,9 @@
 namespace swmpm {
 
 template <int Dim>
-Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::filesystem::path& path,
-                        const std::string& header_comment, std::optional<std::size_t> resume_bytes) {
+Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const Formulation<Dim>& f,
+                        const std::filesystem::path& path, const std::string& header_comment,
+                        std::optional<std::size_t> resume_bytes) {
   std::ostringstream header;
   header << "time";
   reach_ = 0.5 * s.grid.cell_size * (1.0 + 1e-9);  // h/2, with round-off
@@ -21,12 +22,15 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
     const auto& mon = s.output.monitors[k];
     const std::string where = "/output/monitors/" + std::to_string(k);
     if (mon.gauge) {  // a water_level gauge: no particle; the parser allows water_level alone here
-      if (!scene::row_of(s.formulation).water.fluid_particles)
+      const scene::WaterLayout& w = scene::row_of(s.formulation).water;
+      const bool grid = w.free_water_on_grid && f.fluid_on_grid();  // mpm-fem: the phase field
+      if (!w.fluid_particles && !grid)
         throw std::runtime_error(where + "/quantities: \"water_level\" needs liquid points (a double-point "
-                                 "formulation)");
+                                 "formulation) or a fluid on the grid (mpm-fem)");
       monitor_particle_.push_back(-1);
       monitor_water_.push_back(0);
       monitor_gauge_.push_back(static_cast<int>(gauges_.size()));
+      monitor_probe_.push_back(-1);
       names_.push_back(mon.name);
       for (const auto& qn : mon.quantities) {
         if (qn != "water_level")
@@ -34,7 +38,32 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
         columns_.push_back({-1, Q::level, static_cast<int>(gauges_.size())});
         header << "," << mon.name << "." << qn;
       }
-      gauges_.push_back({(*mon.gauge)[0], (*mon.gauge)[2]});
+      gauges_.push_back({(*mon.gauge)[0], (*mon.gauge)[2], grid});
+      continue;
+    }
+    if (mon.at && mon.phase == "fluid" && f.fluid_on_grid()) {  // an Eulerian probe of the grid's fluid
+      const int k_probe = static_cast<int>(probes_.size());
+      monitor_particle_.push_back(-1);
+      monitor_water_.push_back(0);
+      monitor_gauge_.push_back(-1);
+      monitor_probe_.push_back(k_probe);
+      names_.push_back(mon.name);
+      static constexpr GridQuantity velocity[] = {GridQuantity::velocity_x, GridQuantity::velocity_y,
+                                                  GridQuantity::velocity_z};
+      for (const auto& qn : mon.quantities) {
+        const auto xyz = std::string("xyz").find(qn.back());
+        if (qn == "pore_pressure")
+          columns_.push_back({-1, Q::probe, k_probe, false, GridQuantity::pressure});
+        else if (qn.rfind("velocity_", 0) == 0 && xyz != std::string::npos && static_cast<int>(xyz) < Dim)
+          columns_.push_back({-1, Q::probe, k_probe, false, velocity[xyz]});
+        else
+          throw std::runtime_error(where + "/quantities: \"" + qn + "\" is not available at a fixed point of the "
+                                   "grid's fluid (an Eulerian probe records pore_pressure and velocity_*; follow a "
+                                   "soil point with \"phase\": \"solid\" for the others)");
+        header << "," << mon.name << "." << qn;
+      }
+      probes_.push_back(*mon.at);
+      probe_reads_.push_back(mon.quantities);
       continue;
     }
     // A water point of the double-point set, or a soil point. Single-point two-phase sets carry
@@ -69,6 +98,7 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const std::
     monitor_particle_.push_back(pid);
     monitor_water_.push_back(water && pid >= 0);
     monitor_gauge_.push_back(-1);
+    monitor_probe_.push_back(-1);
     names_.push_back(mon.name);
     for (const auto& qn : mon.quantities) {
       Column c{pid, Q::disp, 0};
@@ -123,7 +153,12 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
   for (const Column& c : columns_) {
     double val = 0.0;
     if (c.q == Q::level) {
-      row_ << "," << water_level(st.fluid, gauges_[static_cast<std::size_t>(c.comp)]);
+      const Gauge& g = gauges_[static_cast<std::size_t>(c.comp)];
+      row_ << "," << (g.grid ? f.grid_water_level(g.x, g.z) : water_level(st.fluid, g));
+      continue;
+    }
+    if (c.q == Q::probe) {  // the grid's fluid at a fixed point (the last completed step's nodes)
+      row_ << "," << f.grid_value(probes_[static_cast<std::size_t>(c.comp)], c.grid);
       continue;
     }
     if (c.water) {  // a water point: its own position, velocity, pore pressure and porosity
@@ -156,7 +191,8 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
         val = ke + se;
         break;
       case Q::work: val = external_work; break;
-      case Q::level: break;  // above
+      case Q::level:
+      case Q::probe: break;  // above
     }
     row_ << "," << val;
   }
@@ -211,7 +247,17 @@ std::vector<std::string> Monitors<Dim>::describe(const State<Dim>& st) const {
       const Gauge& g = gauges_[static_cast<std::size_t>(gi)];
       os << "water level on the vertical line x = " << g.x;
       if (Dim == 3) os << ", z = " << g.z;
-      os << " (the liquid points within " << reach_ << " m of it)";
+      if (g.grid) os << " (the highest height where the grid's phase field phi crosses 1/2)";
+      else os << " (the liquid points within " << reach_ << " m of it)";
+    } else if (const int pi = monitor_probe_[k]; pi >= 0) {
+      const auto& x = probes_[static_cast<std::size_t>(pi)];
+      os << "fixed point (";
+      for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << x[a];
+      os << ") of the grid's fluid (Eulerian probe: ";
+      const auto& reads = probe_reads_[static_cast<std::size_t>(pi)];
+      for (std::size_t q = 0; q < reads.size(); ++q)
+        os << (q ? ", " : "") << (reads[q] == "pore_pressure" ? "pore_pressure = the fluid's pressure" : reads[q]);
+      os << " interpolated from the nodes)";
     } else if (p < 0) os << "whole system";
     else {
       os << "follows " << (water ? "water point " : "solid particle ") << ps.id[p] << " starting at (";

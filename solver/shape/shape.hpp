@@ -18,10 +18,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
+#include "scene/scene.hpp"
 #include "solver/common.hpp"
 #include "solver/grid/grid.hpp"
 
@@ -226,6 +228,21 @@ struct BSpline {
 
 using BSpline2 = BSpline<2>;
 using BSpline3 = BSpline<3>;
+
+/// Calls fn.template operator()<Policy>() with the policy of a scene's shape function, for code
+/// outside the formulations that evaluates the solver's basis functions (preprocess's initial
+/// phase field); the formulations are dispatched once, when they are built, by dispatch_shape
+/// (formulations/registry.hpp).
+template <class Fn>
+auto with_policy(scene::ShapeFunction f, Fn&& fn) {
+  switch (f) {
+    case scene::ShapeFunction::linear: return fn.template operator()<Linear>();
+    case scene::ShapeFunction::gimp: return fn.template operator()<Gimp>();
+    case scene::ShapeFunction::bspline2: return fn.template operator()<BSpline2>();
+    case scene::ShapeFunction::bspline3: return fn.template operator()<BSpline3>();
+  }
+  throw std::logic_error("unknown shape function");
+}
 
 /// Per-particle shape data, computed once per step and reused by every transfer of that step.
 /// kGradients = false: the weights only (points that never take a gradient, e.g. the water points

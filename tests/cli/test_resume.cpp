@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "support/run_helpers.hpp"
+#include "support/slope_scene.hpp"
 
 namespace {
 
@@ -106,6 +107,22 @@ json shortened(json s, double end, int frames) {
 TEST(Resume, DryIsBitwiseTheUninterruptedRun) {
   const Pair p = run_killed_and_resumed(shortened(example("elastic-column/scene.json"), 1.0, 20), "dry", 6);
   expect_identical(p, "dry");
+}
+
+TEST(Resume, DryInitialisationWithTheMaterialParametersOfThePhase) {
+  // The phase's material models swap in at its start and back at t = 0 (PhaseMaterials,
+  // solver/materials/material.hpp); the resumed run, killed after the phase, replays both swaps.
+  // A cohesionless slope with c = 1 MPa during a plastic phase: it slides from t = 0.
+  json s = swmpm::testing::dry_mc_slope("resume-init", 1.0, 1.0);
+  s["materials"][0]["cohesion"] = 0.0;
+  s["initialisation"] = {{"duration", 0.6}, {"gravity_ramp", 0.4}, {"damping", 0.3}, {"plasticity", true},
+                         {"materials", {{"soil", {{"cohesion", 1e6}}}}}};
+  s["time"]["dt"] = 5e-4;
+  s["output"]["interval"] = 0.1;
+  s["output"]["monitors"] = {{{"name", "crest"}, {"at", {8.5, 6.75}}, {"quantities", {"displacement_y", "plastic_strain"}}}};
+  const Pair p = run_killed_and_resumed(s, "dry-init-materials", 9);
+  expect_identical(p, "dry-init-materials");
+  EXPECT_GT(p.resumed_run.value("resumed_from_time", -1.0), 0.0) << "killed after the phase";
 }
 
 TEST(Resume, DryBsplinesWithModifiedFbarBetweenFrames) {

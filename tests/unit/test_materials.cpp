@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "scene/scene.hpp"
@@ -115,4 +116,66 @@ TEST(TimeFunctions, ExpressionTableAndRamp) {
   TimeFunction r(tr);
   EXPECT_DOUBLE_EQ(r(0.25), 0.5);
   EXPECT_DOUBLE_EQ(r(1.0), 1.0);
+}
+
+namespace {
+
+/// A cohesionless Mohr–Coulomb sand and a fluid, with an initialisation phase that gives the sand
+/// a cohesion of 1 MPa (initialisation.materials).
+scene::Scene sand_with_phase_cohesion(bool plasticity) {
+  scene::Scene s;
+  scene::Material sand;
+  sand.name = "sand";
+  sand.model = scene::MaterialModel::mohr_coulomb;
+  sand.params = {{"youngs_modulus", 1.0e7}, {"poisson_ratio", 0.3}, {"cohesion", 0.0}, {"friction_angle", 30.0},
+                 {"dilation_angle", 0.0}, {"density", 2000.0}};
+  scene::Material water;
+  water.name = "water";
+  water.model = scene::MaterialModel::fluid;
+  s.materials = {sand, water};
+  s.initialisation.duration = 1.0;
+  s.initialisation.plasticity = plasticity;
+  s.initialisation.materials["sand"] = {{"cohesion", 1.0e6}};
+  return s;
+}
+
+/// The plastic strain of a fresh particle after a simple shear of 1e-3 from zero stress: any
+/// shear yields cohesionless sand at p = 0; with c = 1 MPa it stays elastic (tau = G gamma ~ 4 kPa).
+double plastic_strain_of_shear(const MaterialModel<2>& model) {
+  auto ps = one_particle();
+  MatD<2> L;
+  L << 0, 1, 0, 0;  // 1/s
+  drive(model, ps, L, 1e-4, 10);
+  return ps.eps_p[0];
+}
+
+}  // namespace
+
+TEST(Materials, TheInitialisationPhaseSwapsInItsOwnParametersAndBack) {
+  const scene::Scene s = sand_with_phase_cohesion(true);
+  std::vector<std::unique_ptr<MaterialModel<2>>> models;
+  models.push_back(make_material<2>(s.materials[0], s));
+  models.push_back(nullptr);  // the fluid has no constitutive model
+  PhaseMaterials<2> phase(s);
+  EXPECT_GT(plastic_strain_of_shear(*models[0]), 0.0);  // the scene's c = 0
+  const MaterialModel<2>* scene_model = models[0].get();
+  phase.set(models, &s.initialisation);
+  EXPECT_NE(models[0].get(), scene_model);
+  EXPECT_EQ(models[1], nullptr);
+  EXPECT_EQ(plastic_strain_of_shear(*models[0]), 0.0);  // c = 1 MPa, plastic flow on
+  phase.set(models, &s.initialisation);                  // again: nothing changes
+  EXPECT_EQ(plastic_strain_of_shear(*models[0]), 0.0);
+  phase.set(models, nullptr);
+  EXPECT_EQ(models[0].get(), scene_model);  // the scene's own model, as it was
+  EXPECT_GT(plastic_strain_of_shear(*models[0]), 0.0);
+
+  // Plastic flow off during the phase: off in both, back on in the scene's model at the end.
+  const scene::Scene e = sand_with_phase_cohesion(false);
+  std::vector<std::unique_ptr<MaterialModel<2>>> elastic_models;
+  elastic_models.push_back(make_material<2>(e.materials[0], e));
+  PhaseMaterials<2> elastic_phase(e);
+  elastic_phase.set(elastic_models, &e.initialisation);
+  EXPECT_EQ(plastic_strain_of_shear(*elastic_models[0]), 0.0);
+  elastic_phase.set(elastic_models, nullptr);
+  EXPECT_GT(plastic_strain_of_shear(*elastic_models[0]), 0.0);
 }

@@ -8,11 +8,16 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include <cmath>
+#include <limits>
+
 #include "scene/scene.hpp"
+#include "support/mpm_fem_scene.hpp"
 #include "support/pond_scene.hpp"
 
 namespace {
@@ -810,6 +815,138 @@ TEST(SceneErrors, AllProblemsAreReportedTogether) {
     const std::string what = e.what();  // all lines joined by '\n'
     EXPECT_EQ(std::count(what.begin(), what.end(), '\n'), 4);
   }
+}
+
+// ---- mpm-fem's keys: solver.air, solver.phase_field, grain_diameter, water_level -----------------
+
+TEST(Scene, MpmFemAirAndPhaseFieldDefaultsAndRoundTrip) {
+  const Scene s = parse_scene(swmpm::testing::mpm_fem_scene(), "t.json");
+  EXPECT_EQ(s.formulation, Formulation::mpm_fem);
+  EXPECT_DOUBLE_EQ(s.solver.air.density, 1.2);               // kg/m^3
+  EXPECT_DOUBLE_EQ(s.solver.air.dynamic_viscosity, 1.8e-5);  // Pa s
+  EXPECT_FALSE(s.solver.phase_field.interface_width);        // the solver's choice
+  EXPECT_FALSE(s.solver.phase_field.mobility);
+  EXPECT_DOUBLE_EQ(s.materials[0].at("grain_diameter"), 0.003);
+  const json resolved = to_json(s);
+  EXPECT_EQ(resolved["solver"]["air"], json({{"density", 1.2}, {"dynamic_viscosity", 1.8e-5}}));
+  EXPECT_EQ(resolved["solver"]["phase_field"], json::object());
+  EXPECT_EQ(resolved["materials"][0]["grain_diameter"], 0.003);
+  EXPECT_EQ(to_json(parse_scene(resolved, "t.json")), resolved);
+
+  json j = swmpm::testing::mpm_fem_scene();
+  j["solver"] = {{"air", {{"density", 1.25}, {"dynamic_viscosity", 2e-5}}},
+                 {"phase_field", {{"interface_width", 0.06}, {"mobility", 200}}}};
+  const Scene t = parse_scene(j, "t.json");
+  EXPECT_DOUBLE_EQ(t.solver.air.density, 1.25);
+  EXPECT_DOUBLE_EQ(t.solver.air.dynamic_viscosity, 2e-5);
+  ASSERT_TRUE(t.solver.phase_field.interface_width && t.solver.phase_field.mobility);
+  EXPECT_DOUBLE_EQ(*t.solver.phase_field.interface_width, 0.06);
+  EXPECT_DOUBLE_EQ(*t.solver.phase_field.mobility, 200);
+  const json r = to_json(t);
+  EXPECT_EQ(r["solver"]["phase_field"], json({{"interface_width", 0.06}, {"mobility", 200}}));
+  EXPECT_EQ(to_json(parse_scene(r, "t.json")), r);
+}
+
+TEST(SceneErrors, AirAndPhaseFieldAreReadByMpmFemOnly) {
+  json j = scene_2d();  // explicit-single-point
+  j["solver"] = {{"air", {{"density", 1.2}}}, {"phase_field", json::object()}};
+  EXPECT_TRUE(reports(j, "/solver/air", "got a value, but explicit-single-point does not read this key (read by "
+                                        "mpm-fem); remove the key"));
+  EXPECT_TRUE(reports(j, "/solver/phase_field", "explicit-single-point does not read this key (read by mpm-fem)"));
+  json k = scene_3d();  // dry
+  k["solver"]["air"] = {{"dynamic_viscosity", 1e-5}};
+  EXPECT_TRUE(reports(k, "/solver/air", "dry does not read this key (read by mpm-fem)"));
+  // Not written back where they are not read.
+  const json resolved = to_json(parse_scene(scene_2d(), "t.json"));
+  EXPECT_FALSE(resolved["solver"].contains("air"));
+  EXPECT_FALSE(resolved["solver"].contains("phase_field"));
+  // grain_diameter: explicit-double-point and mpm-fem.
+  json l = scene_2d();
+  l["materials"][0]["grain_diameter"] = 0.001;
+  EXPECT_TRUE(reports(l, "/materials/0/grain_diameter", "(read by explicit-double-point, mpm-fem)"));
+}
+
+TEST(SceneErrors, AirAndPhaseFieldValues) {
+  const auto with = [](const std::string& object, const std::string& key, const json& v) {
+    json j = swmpm::testing::mpm_fem_scene();
+    j["solver"][object][key] = v;
+    return j;
+  };
+  EXPECT_TRUE(reports(with("air", "density", -1.2), "/solver/air/density", "got -1.2, expected a positive number [kg/m^3]"));
+  EXPECT_TRUE(reports(with("air", "dynamic_viscosity", 0), "/solver/air/dynamic_viscosity", "expected a positive number [Pa s]"));
+  EXPECT_TRUE(reports(with("phase_field", "interface_width", 0), "/solver/phase_field/interface_width",
+                      "expected a positive number [m]"));
+  EXPECT_TRUE(reports(with("phase_field", "mobility", "fast"), "/solver/phase_field/mobility",
+                      "expected a positive number [1/s]"));
+  // Finite: a number too large for a double reads as infinity.
+  EXPECT_TRUE(reports(with("phase_field", "mobility", std::numeric_limits<double>::infinity()),
+                      "/solver/phase_field/mobility", "expected a positive number"));
+  EXPECT_TRUE(reports(with("air", "densty", 1.2), "/solver/air/densty", "did you mean \"density\""));
+  json j = swmpm::testing::mpm_fem_scene();
+  j["solver"]["air"] = 1.2;
+  EXPECT_TRUE(reports(j, "/solver/air", "expected an object"));
+}
+
+TEST(Scene, WaterLevelGaugeIsReadByMpmFem) {
+  // The grid's phase field gives the level (monitors.hpp); the gauge parses as in double-point.
+  json j = swmpm::testing::mpm_fem_scene();
+  j["output"]["monitors"] = {{{"name", "gauge"}, {"at", {0.2}}, {"quantities", {"water_level"}}}};
+  const Scene s = parse_scene(j, "t.json");
+  ASSERT_TRUE(s.output.monitors[0].gauge);
+  EXPECT_EQ((*s.output.monitors[0].gauge)[0], 0.2);
+}
+
+// ---- initialisation.materials -------------------------------------------------------------------
+
+TEST(Scene, InitialisationMaterialsOverrideTheModelParameters) {
+  json j = scene_3d();  // "clay": mohr-coulomb, cohesion 0 by default
+  j["initialisation"] = {{"duration", 1.0}, {"plasticity", true},
+                         {"materials", {{"clay", {{"cohesion", 1e5}, {"friction_angle", 40}}}}}};
+  const Scene s = parse_scene(j, "t.json");
+  ASSERT_EQ(s.initialisation.materials.size(), 1u);
+  EXPECT_EQ(s.initialisation.materials.at("clay"), (std::map<std::string, double>{{"cohesion", 1e5}, {"friction_angle", 40}}));
+  EXPECT_DOUBLE_EQ(s.materials[0].at("cohesion"), 0.0);  // the scene's own value stays
+  const json resolved = to_json(s);
+  EXPECT_EQ(resolved["initialisation"]["materials"], json({{"clay", {{"cohesion", 1e5}, {"friction_angle", 40.0}}}}));
+  EXPECT_EQ(to_json(parse_scene(resolved, "t.json")), resolved);
+  // Absent: none, and not written.
+  EXPECT_FALSE(to_json(parse_scene(scene_3d(), "t.json")).contains("initialisation"));
+}
+
+TEST(SceneErrors, InitialisationMaterialsRules) {
+  const auto with = [](const json& materials) {
+    json j = scene_2d();  // "sand" linear-elastic (saturated), "water" fluid
+    j["initialisation"] = {{"duration", 1.0}, {"materials", materials}};
+    return j;
+  };
+  EXPECT_TRUE(reports(with({{"snad", {{"youngs_modulus", 2e7}}}}), "/initialisation/materials/snad",
+                      "got material \"snad\", but no material has that name; expected a solid material (defined: "
+                      "sand) (did you mean \"sand\"?)"));
+  EXPECT_TRUE(reports(with({{"water", {{"bulk_modulus", 1e9}}}}), "/initialisation/materials/water",
+                      "a fluid; expected a solid material"));
+  EXPECT_TRUE(reports(with({{"sand", {{"youngs_modulu", 2e7}}}}), "/initialisation/materials/sand/youngs_modulu",
+                      "did you mean \"youngs_modulus\""));
+  // A key of the model's tables the constitutive law does not read, and one of another model.
+  EXPECT_TRUE(reports(with({{"sand", {{"porosity", 0.5}}}}), "/initialisation/materials/sand/porosity",
+                      "got \"porosity\", which linear-elastic's constitutive model does not read"));
+  EXPECT_TRUE(reports(with({{"sand", {{"cohesion", 1e5}}}}), "/initialisation/materials/sand/cohesion",
+                      "unknown key \"cohesion\""));
+  EXPECT_TRUE(reports(with({{"sand", {{"poisson_ratio", 0.5}}}}), "/initialisation/materials/sand/poisson_ratio",
+                      "expected a number in [-1, 0.5) [-]"));
+  EXPECT_TRUE(reports(with({{"sand", 3}}), "/initialisation/materials/sand", "expected an object of material"));
+  EXPECT_TRUE(reports(with(json::array({1})), "/initialisation/materials", "expected an object of objects"));
+  // The rules across keys hold for the parameters the phase runs with.
+  json k = scene_3d();  // friction_angle 25
+  k["initialisation"] = {{"duration", 1.0}, {"materials", {{"clay", {{"friction_angle", 10}}}}}};
+  k["materials"][0]["dilation_angle"] = 20;
+  EXPECT_TRUE(reports(k, "/initialisation/materials/clay/friction_angle",
+                      "got dilation_angle 20 > friction_angle 10 during the phase"));
+  // mpm-fem does not swap the phase's models in yet: refused rather than ignored.
+  json m = swmpm::testing::mpm_fem_scene();
+  m["initialisation"] = {{"duration", 1.0}, {"materials", {{"beads", {{"cohesion", 1e5}}}}}};
+  EXPECT_TRUE(reports(m, "/initialisation/materials",
+                      "got a value, but mpm-fem does not read this key (read by dry, explicit-single-point, "
+                      "semi-implicit-single-point, semi-implicit-double-point, explicit-double-point)"));
 }
 
 // ---- the reference documentation agrees with the schema -----------------------------------------

@@ -9,7 +9,9 @@
 //    k = 1 m/s the pore pressure at t = 0 is hydrostatic and the skeleton carries the buoyant
 //    weight; with the material's k = 1e-4 m/s it would still carry most of the load as excess pressure;
 //  - the same layer with semi-implicit-double-point: the water points sit exactly on their soil
-//    points at t = 0, and the pressure is hydrostatic.
+//    points at t = 0, and the pressure is hydrostatic;
+//  - a cohesionless slope that yields under gravity stays elastic during a plastic phase that gives
+//    it a large cohesion (initialisation.materials, seed 004) and slides after t = 0.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -171,6 +173,31 @@ TEST(Initialisation, DoublePointWaterPointsStayOnTheirSoilPoints) {
   EXPECT_EQ(gap, 0.0);
   EXPECT_LT(st.p_rms, 0.02);
   EXPECT_LT(st.sigma_rms, 0.03);
+}
+
+// A cohesionless slope (c = 0, φ = 30° under a 45° face, SRF 1) fails under gravity. With plastic
+// flow on during the phase but a cohesion of 1 MPa in place of the scene's (initialisation.materials,
+// seed 004's procedure), it stays elastic to t = 0 and slides once c = 0 comes back; without the
+// override the same phase already yields.
+TEST(Initialisation, MaterialParametersOfThePhaseHoldUntilZero) {
+  json s = dry_slope(1.0, true);
+  s["materials"][0]["cohesion"] = 0.0;
+  s["initialisation"]["materials"] = {{"soil", {{"cohesion", 1e6}}}};
+  const std::string run = swmpm::testing::run_scene(s, "init-slope-cohesion");
+  const auto f0 = frame_at(run, 0.0), end = swmpm::testing::last_frame(run);
+  const double ep0 = max_of(f0.get("plastic_strain", "t0").values);
+  const double ep_end = max_of(end.get("plastic_strain", "end").values), u_end = max_displacement(end);
+  s["initialisation"].erase("materials");
+  const std::string bare = swmpm::testing::run_scene(s, "init-slope-no-cohesion");
+  const double ep0_bare = max_of(frame_at(bare, 0.0).get("plastic_strain", "t0").values);
+  std::printf("c = 0 slope, c = 1 MPa during the phase: max eps_p at t = 0 %.3g, at 2 s %.3f (max |u| %.3f m); "
+              "without the phase's cohesion max eps_p at t = 0 %.3f\n", ep0, ep_end, u_end, ep0_bare);
+  EXPECT_EQ(ep0, 0.0);
+  EXPECT_GT(ep_end, 0.05);
+  EXPECT_GT(u_end, 0.1);
+  EXPECT_GT(ep0_bare, 0.05);
+  const std::string log = swmpm::testing::read_text(run + "/log.txt");
+  EXPECT_NE(log.find("materials soil: cohesion 1e+06"), std::string::npos) << log;
 }
 
 TEST(Initialisation, SceneChecks) {

@@ -68,6 +68,7 @@ class Core : public Formulation<Dim> {
         damping_(s.solver.damping),
         scene_damping_(s.solver.damping),
         materials_(make_materials<Dim>(s)),
+        phase_materials_(s),
         material_particles_(group_by_material(state.solid, s.materials.size())),
         pressure_(grid_, box_, remap_of(s, name), drained_faces(), face_pressures(s)),
         fbar_(s, grid_) {
@@ -423,7 +424,7 @@ class Core : public Formulation<Dim> {
   /// The initialisation phase's plasticity, damping and permeability (its hydraulic_conductivity
   /// for every material while it runs). True when a phase with its own permeability has just ended.
   bool set_phase(const scene::Initialisation* phase) {
-    set_plastic(materials_, phase == nullptr || phase->plasticity);
+    phase_materials_.set(materials_, phase);  // the phase's parameters and plastic flag (materials/material.hpp)
     damping_ = phase_damping(phase, scene_damping_);
     if (scene_pore_.empty()) scene_pore_ = pore_;
     pore_ = scene_pore_;
@@ -485,6 +486,7 @@ class Core : public Formulation<Dim> {
   ParticleLoads<Dim> loads_;
   double flip_, damping_, scene_damping_;
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
+  PhaseMaterials<Dim> phase_materials_;  // initialisation.materials: swapped in by set_initialisation
   std::vector<std::vector<int>> material_particles_;
   std::vector<PoreWater> pore_;        // per solid material (the initialisation phase's while it runs)
   std::vector<PoreWater> scene_pore_;  // per solid material, as the scene gives it
