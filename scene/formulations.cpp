@@ -62,8 +62,7 @@ std::string join(const std::vector<std::string>& v) {
 std::vector<FormulationRow> make_rows() {
   std::vector<FormulationRow> rows;
   // initialisation.materials: the formulations whose set_initialisation swaps the phase's material
-  // models in (PhaseMaterials, solver/materials/material.hpp). mpm-fem does not yet, so it refuses
-  // the key rather than ignore it.
+  // models in (PhaseMaterials, solver/materials/material.hpp): all of them.
   const std::vector<std::string> phase_materials = {"/initialisation/materials"};
   rows.push_back({.id = Formulation::dry,
                   .name = "dry",
@@ -147,7 +146,7 @@ std::vector<FormulationRow> make_rows() {
                   .check = check_mpm_fem,
                   .material_keys = {"grain_diameter", "ergun_a", "ergun_b"},
                   // The air and the phase field of the grid's fluid.
-                  .keys = {"/solver/air", "/solver/phase_field"}});
+                  .keys = {"/solver/air", "/solver/phase_field", "/initialisation/materials"}});
   return rows;
 }
 

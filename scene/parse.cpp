@@ -577,6 +577,8 @@ void SceneParser::parse_solver(const json& j, const std::string& path) {
                               {&phase_field_table()});
   if (pf.ok("interface_width")) sv.phase_field.interface_width = pf.num("interface_width");
   if (pf.ok("mobility")) sv.phase_field.mobility = pf.num("mobility");
+  if (pf.ok("lsic")) sv.phase_field.lsic = pf.get("lsic").get<bool>();
+  if (pf.ok("volume_correction")) sv.phase_field.volume_correction = pf.get("volume_correction").get<bool>();
 }
 
 void SceneParser::parse_initialisation(const json& j, const std::string& path, const Obj& top) {

@@ -185,9 +185,11 @@ struct Air {
 /// mpm-fem (seed 004): the Allen–Cahn phase field phi (1 water, 0 air) that carries the water's
 /// free surface on the grid. Absent values are the solver's to choose.
 struct PhaseField {
-  std::optional<double> interface_width;  // m, the interface's 5 %-95 % width; absent: the solver's (2.5 cells)
+  std::optional<double> interface_width;  // m, the interface's 5 %-95 % width; absent: the solver's (3 cells)
   std::optional<double> mobility;         // 1/s, M_phi W of seed 004's Allen–Cahn equation with the barrier
-                                          // height W = 1: the interface's relaxation rate; absent: the solver's (500)
+                                          // height W = 1: the interface's relaxation rate; absent: the solver's (200)
+  bool lsic = false;               // the seed's LSIC diffusion (h/2)|v| in the phase field's equation
+  bool volume_correction = true;   // int n phi restored after each step
 };
 
 struct Solver {

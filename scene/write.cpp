@@ -209,6 +209,8 @@ nlohmann::json to_json(const Scene& s) {
     json pf = json::object();
     if (sv.phase_field.interface_width) pf["interface_width"] = *sv.phase_field.interface_width;
     if (sv.phase_field.mobility) pf["mobility"] = *sv.phase_field.mobility;
+    pf["lsic"] = sv.phase_field.lsic;
+    pf["volume_correction"] = sv.phase_field.volume_correction;
     j["solver"]["phase_field"] = pf;
   }
   return j;

@@ -75,6 +75,7 @@ class MpmFem final : public Formulation<Dim> {
         scene_damping_(s.solver.damping),
         materials_(make_materials<Dim>(s)),
         material_particles_(group_by_material(state.solid, s.materials.size())),
+        phase_materials_(s),
         fbar_(s, grid_) {
     if constexpr (!Shape::bspline)
       throw std::runtime_error("mpm-fem needs grid.shape_function \"bspline2\" or \"bspline3\"");
@@ -90,8 +91,8 @@ class MpmFem final : public Formulation<Dim> {
     const auto& wm = s.materials[water];
     props.rho_w = wm.at("density");
     props.mu_w = wm.has("dynamic_viscosity") ? wm.at("dynamic_viscosity") : 1e-3;
-    props.rho_a = kAirDensity;
-    props.mu_a = kAirViscosity;
+    props.rho_a = s.solver.air.density;
+    props.mu_a = s.solver.air.dynamic_viscosity;
     // The skeletons' permeability (hydraulic conductivity k_h [m/s]; intrinsic k = k_h mu / (rho g)).
     perm_.resize(s.materials.size());
     to_intrinsic_ = props.mu_w / (props.rho_w * porous::g_earth);
@@ -120,9 +121,10 @@ class MpmFem final : public Formulation<Dim> {
                                " nodes, the grid " + std::to_string(grid_.num_nodes()) + ": run swmpm preprocess again");
     }
     fem::PhaseFieldParameters pf;
-    pf.width = kDefaultWidthCells * grid_.h();
-    pf.mobility = kDefaultMobility;
-    pf.volume_correction = true;
+    pf.width = s.solver.phase_field.interface_width.value_or(kDefaultWidthCells * grid_.h());
+    pf.mobility = s.solver.phase_field.mobility.value_or(kDefaultMobility);
+    pf.volume_correction = s.solver.phase_field.volume_correction;
+    pf.lsic = s.solver.phase_field.lsic;
     phase_.setup(grid_, fluid_.basis(), pf);
     phase_mobility_ = pf.mobility;
     const std::size_t nodes = grid_.num_nodes();
@@ -249,7 +251,7 @@ class MpmFem final : public Formulation<Dim> {
     return power;
   }
   void set_initialisation(State<Dim>&, const scene::Initialisation* phase) override {
-    set_plastic(materials_, phase == nullptr || phase->plasticity);
+    phase_materials_.set(materials_, phase);  // the phase's parameters and plastic flag (materials/material.hpp)
     damping_ = phase_damping(phase, scene_damping_);
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
@@ -369,9 +371,8 @@ class MpmFem final : public Formulation<Dim> {
 
  private:
   static constexpr double kDefaultWidthCells = 3.0;  // interface 5 %-95 % width, cells
-  static constexpr double kDefaultMobility = 500.0;   // 1/s, the interface's relaxation rate M W
+  static constexpr double kDefaultMobility = 200.0;   // 1/s, the interface's relaxation rate M W
   static constexpr double kMaxStep = 1e-3;            // s, dt auto with nothing moving
-  static constexpr double kAirDensity = 1.2, kAirViscosity = 1.8e-5;  // kg/m^3, Pa s (solver.air)
 
   /// The fluid's Dirichlet conditions on the grid faces (boundaries[].on = x_min ... z_max):
   /// impermeable stops the normal velocity, and with a fixed solid every component (no-slip);
@@ -644,6 +645,7 @@ class MpmFem final : public Formulation<Dim> {
   double flip_, damping_, scene_damping_;
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
   std::vector<std::vector<int>> material_particles_;
+  PhaseMaterials<Dim> phase_materials_;  // initialisation.materials: swapped in by set_initialisation
   std::vector<porous::Permeability> perm_;  // per material (soils)
   double to_intrinsic_ = 0.0;               // k [m^2] per k_h [m/s]: mu_w / (rho_w g)
   fem::Fluid<Dim, Shape> fluid_;

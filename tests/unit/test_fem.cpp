@@ -71,7 +71,7 @@ TEST(EulerianFluid, WaterAtRestIsHydrostatic) {
   fluid.setup(grid, fem::FluidProperties{}, tank_conditions(grid));
   fem::PhaseFieldParameters prm;
   prm.width = 3.0 * h;
-  prm.mobility = 500.0;
+  prm.mobility = 100.0;
   fem::PhaseField<2, Shape> pf;
   pf.setup(grid, fluid.basis(), prm);
   grid.for_each_node(grid.all_nodes(), [&](std::size_t i, const std::array<int, 2>& ijk) {

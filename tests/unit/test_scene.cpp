@@ -829,7 +829,7 @@ TEST(Scene, MpmFemAirAndPhaseFieldDefaultsAndRoundTrip) {
   EXPECT_DOUBLE_EQ(s.materials[0].at("grain_diameter"), 0.003);
   const json resolved = to_json(s);
   EXPECT_EQ(resolved["solver"]["air"], json({{"density", 1.2}, {"dynamic_viscosity", 1.8e-5}}));
-  EXPECT_EQ(resolved["solver"]["phase_field"], json::object());
+  EXPECT_EQ(resolved["solver"]["phase_field"], json({{"lsic", false}, {"volume_correction", true}}));
   EXPECT_EQ(resolved["materials"][0]["grain_diameter"], 0.003);
   EXPECT_EQ(to_json(parse_scene(resolved, "t.json")), resolved);
 
@@ -843,7 +843,8 @@ TEST(Scene, MpmFemAirAndPhaseFieldDefaultsAndRoundTrip) {
   EXPECT_DOUBLE_EQ(*t.solver.phase_field.interface_width, 0.06);
   EXPECT_DOUBLE_EQ(*t.solver.phase_field.mobility, 200);
   const json r = to_json(t);
-  EXPECT_EQ(r["solver"]["phase_field"], json({{"interface_width", 0.06}, {"mobility", 200}}));
+  EXPECT_EQ(r["solver"]["phase_field"],
+            json({{"interface_width", 0.06}, {"lsic", false}, {"mobility", 200}, {"volume_correction", true}}));
   EXPECT_EQ(to_json(parse_scene(r, "t.json")), r);
 }
 
@@ -941,12 +942,10 @@ TEST(SceneErrors, InitialisationMaterialsRules) {
   k["materials"][0]["dilation_angle"] = 20;
   EXPECT_TRUE(reports(k, "/initialisation/materials/clay/friction_angle",
                       "got dilation_angle 20 > friction_angle 10 during the phase"));
-  // mpm-fem does not swap the phase's models in yet: refused rather than ignored.
+  // mpm-fem reads it too (seed 004's large cohesion while gravity ramps up).
   json m = swmpm::testing::mpm_fem_scene();
   m["initialisation"] = {{"duration", 1.0}, {"materials", {{"beads", {{"cohesion", 1e5}}}}}};
-  EXPECT_TRUE(reports(m, "/initialisation/materials",
-                      "got a value, but mpm-fem does not read this key (read by dry, explicit-single-point, "
-                      "semi-implicit-single-point, semi-implicit-double-point, explicit-double-point)"));
+  EXPECT_EQ(dump_lines(problems(m)), "\n  (no problems)") << "mpm-fem swaps the phase's models in";
 }
 
 // ---- the reference documentation agrees with the schema -----------------------------------------

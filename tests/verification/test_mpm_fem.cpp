@@ -2,10 +2,14 @@
 // (docs/verification.md, "mpm-fem").
 //   D1  1D consolidation: 3 x 50 cells of 0.02 m, 10 kPa on a drained top, against Terzaghi
 //   through-flow: water driven through a fixed bed by a pressure difference, against the drag law
+//   dam break: the surge front against Martin & Moyce (1952), Table 2
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "support/run_helpers.hpp"
 
@@ -126,4 +130,54 @@ TEST(MpmFem, ThroughFlowFollowsTheDragLaw) {
       EXPECT_NEAR(q, ref.law, 0.03 * ref.law) << D << " " << y;
     }
   }
+}
+
+namespace {
+
+/// The surge front of a grid frame: the largest x where phi = 1/2 on the lowest row of nodes above
+/// the floor (y = h/2), interpolated between the nodes.
+double front_of(const swmpm::scene::PointCloud& grid, double h) {
+  const auto* phi = grid.find("phase_field");
+  std::vector<std::pair<double, double>> row;  // (x, phi)
+  for (std::size_t i = 0; i < grid.points.size(); ++i)
+    if (std::abs(grid.points[i][1] - 0.5 * h) < 1e-9) row.emplace_back(grid.points[i][0], phi->values[i]);
+  std::sort(row.begin(), row.end());
+  for (std::size_t k = row.size() - 1; k > 0; --k)
+    if (row[k - 1].second >= 0.5 && row[k].second < 0.5)
+      return row[k - 1].first + (row[k - 1].second - 0.5) / (row[k - 1].second - row[k].second) * (row[k].first - row[k - 1].first);
+  return row.empty() || row.back().second < 0.5 ? 0.0 : row.back().first;
+}
+
+}  // namespace
+
+// Dam break: a column of water a = 57.15 mm wide and 2a high collapses onto a dry floor (the
+// grid's phase field, h = a/10). The front against Martin & Moyce (1952), Table 2, at
+// T = t sqrt(2 g / a) >= 1, within 10 %; the water volume int phi conserved.
+TEST(MpmFem, DamBreakFrontFollowsMartinAndMoyce) {
+  const std::string dir = SWMPM_SOURCE_DIR "/examples/dam-break-mpm-fem/";
+  const std::string run = run_scene(load_json(dir + "scene.json"), "mpmfem-dam-break");
+  const auto mm = swmpm::post::read_reference(dir + "martin-moyce-1952-front.csv");
+  const double a = 0.05715, g = 9.81, h = 0.005715;
+  int compared = 0;
+  double worst = 0.0;
+  for (const auto& e : swmpm::scene::read_pvd(run + "/output/results.pvd")) {
+    if (e.group != "grid") continue;
+    const double T = e.time * std::sqrt(2 * g / a);
+    if (T < 1.0 || T > mm.t.back()) continue;
+    const double x = front_of(swmpm::scene::read_vtu(run + "/output/" + e.file), h);
+    double Z = 0.0;
+    for (std::size_t k = 1; k < mm.t.size(); ++k)
+      if (T <= mm.t[k]) {
+        Z = mm.v[k - 1] + (mm.v[k] - mm.v[k - 1]) * (T - mm.t[k - 1]) / (mm.t[k] - mm.t[k - 1]);
+        break;
+      }
+    const double err = (x / a - Z) / Z;
+    std::printf("dam break: T = %.2f, x/a = %.3f, Martin & Moyce %.3f (%+.1f %%)\n", T, x / a, Z, 100 * err);
+    worst = std::max(worst, std::abs(err));
+    ++compared;
+  }
+  EXPECT_GE(compared, 6);
+  EXPECT_LT(worst, 0.10);
+  const json r = load_json(run + "/run.json");
+  std::printf("dam break: run.json counters %s\n", r.value("counters", json::object()).dump().c_str());
 }
