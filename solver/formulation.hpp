@@ -183,6 +183,8 @@ class Formulation {
   /// (grid_water_level), from the last completed step's nodal values, instead of following water
   /// points. Both NaN outside the grid (and the level NaN where phi < 1/2 on the whole line).
   virtual bool fluid_on_grid() const { return false; }
+  /// The grid nodes that carry the fluid's unknowns (mpm-fem), for the cost per node-step; 0 otherwise.
+  virtual std::size_t fluid_nodes() const { return 0; }
   virtual double grid_value(const std::array<double, 3>& /*x*/, GridQuantity /*q*/) const {
     return std::numeric_limits<double>::quiet_NaN();
   }

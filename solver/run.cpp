@@ -834,8 +834,11 @@ class Runner {
     const long steps_here = state_.step - first_step_;
     const double particle_steps =
         static_cast<double>(state_.solid.size() + state_.fluid.size()) * static_cast<double>(steps_here);
-    const double us_pps = steps_here > 0 ? 1e6 * wall / particle_steps : 0.0;
-    const double loop_us_pps = steps_here > 0 ? 1e6 * loop_wall / particle_steps : 0.0;
+    const double us_pps = steps_here > 0 && particle_steps > 0 ? 1e6 * wall / particle_steps : 0.0;
+    const double loop_us_pps = steps_here > 0 && particle_steps > 0 ? 1e6 * loop_wall / particle_steps : 0.0;
+    // A fluid on the grid (mpm-fem) costs per node: wall us / (grid nodes x steps) as well.
+    const double node_steps = static_cast<double>(f_->fluid_nodes()) * static_cast<double>(steps_here);
+    const double us_pns = steps_here > 0 && node_steps > 0 ? 1e6 * loop_wall / node_steps : 0.0;
     const int frames = static_cast<int>(std::count_if(frames_.begin(), frames_.end(), [](const auto& e) { return e.part == 0; }));
 
     Json rj;
@@ -870,6 +873,10 @@ class Runner {
     rj["threads"] = threads_;
     rj["us_per_particle_step"] = us_pps;
     rj["loop_us_per_particle_step"] = loop_us_pps;
+    if (f_->fluid_nodes() > 0) {
+      rj["fluid_nodes"] = f_->fluid_nodes();
+      rj["loop_us_per_fluid_node_step"] = us_pns;
+    }
     rj["peak_memory_bytes"] = peak_memory_bytes();
     rj["particle_bytes"] = state_.solid.size() * state_.solid.bytes_per_particle() +
                            state_.fluid.size() * state_.fluid.bytes_per_particle();
@@ -893,7 +900,9 @@ class Runner {
       std::ostringstream summary;
       summary << status_ << ": " << state_.step << " steps to t = " << fmt(state_.time) << " s in " << fmt(wall, 4)
               << " s wall (" << fmt(us_pps, 4) << " us per particle-step, " << fmt(loop_us_pps, 4)
-              << " in the time loop, " << threads_ << " threads)";
+              << " in the time loop";
+      if (f_->fluid_nodes() > 0) summary << "; " << fmt(us_pns, 4) << " us per fluid node-step in the time loop";
+      summary << ", " << threads_ << " threads)";
       log_.line(summary.str());
       std::ostringstream split;
       double total = 0.0;

@@ -304,6 +304,7 @@ class MpmFem final : public Formulation<Dim> {
   }
 
   bool fluid_on_grid() const override { return true; }
+  std::size_t fluid_nodes() const override { return grid_.num_nodes(); }
   double grid_value(const std::array<double, 3>& x, GridQuantity q) const override {
     Vec<Dim> xp;
     for (int a = 0; a < Dim; ++a) xp[a] = x[a];
