@@ -54,7 +54,8 @@ void add_postprocess_commands(CLI::App* post, PostArgs& a, bool& quiet) {
     return sub;
   };
   auto phase = [&](CLI::App* sub) {
-    sub->add_option("--phase", a.phase, "solid (default) or fluid")->check(CLI::IsMember({"solid", "fluid"}));
+    sub->add_option("--phase", a.phase, "solid (default), fluid, or grid (mpm-fem's nodes: the fluid's fields)")
+        ->check(CLI::IsMember({"solid", "fluid", "grid"}));
   };
   auto sampling = [&](CLI::App* sub) {
     sub->add_option("--method", a.method,

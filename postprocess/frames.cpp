@@ -54,8 +54,8 @@ int scene_dimension(const fs::path& run_dir) {
 RunSeries::RunSeries(const std::string& run_dir, const std::string& phase) : run_dir_(run_dir), phase_(phase) {
   const fs::path dir(run_dir);
   if (!fs::is_directory(dir)) throw std::runtime_error(run_dir + ": not a run directory (no such directory)");
-  if (phase != "solid" && phase != "fluid")
-    throw std::runtime_error("--phase \"" + phase + "\": expected solid or fluid");
+  if (phase != "solid" && phase != "fluid" && phase != "grid")
+    throw std::runtime_error("--phase \"" + phase + "\": expected solid, fluid or grid");
   const fs::path pvd = dir / "output" / "results.pvd";
   if (!fs::exists(pvd))
     throw std::runtime_error(pvd.string() + ": missing, the run has no frames (run `swmpm solve " + run_dir +
@@ -158,6 +158,14 @@ double particle_spacing(const scene::PointCloud& frame, int dimension) {
     for (double l : half->values) h = std::max(h, 2.0 * l);
   } else if (const auto* volume = frame.find("volume")) {
     for (double v : volume->values) h = std::max(h, std::pow(v, 1.0 / dimension));
+  } else {
+    // A grid frame (mpm-fem's nodes): the largest gap between neighbouring node columns, the cell
+    // size (B-spline nodes sit at the Greville abscissae: h/2 apart at the ends, h inside).
+    std::vector<double> xs;
+    for (const auto& x : frame.points) xs.push_back(x[0]);
+    std::sort(xs.begin(), xs.end());
+    xs.erase(std::unique(xs.begin(), xs.end(), [](double a, double b) { return std::abs(a - b) < 1e-12; }), xs.end());
+    for (std::size_t k = 1; k < xs.size(); ++k) h = std::max(h, xs[k] - xs[k - 1]);
   }
   if (!(h > 0.0))
     throw std::runtime_error("the frames have neither half_size nor volume to tell the particle spacing: give --radius");

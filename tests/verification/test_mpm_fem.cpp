@@ -183,4 +183,9 @@ TEST(MpmFem, DamBreakFrontFollowsMartinAndMoyce) {
   EXPECT_LT(worst, 0.10);
   const json r = load_json(run + "/run.json");
   std::printf("dam break: run.json counters %s\n", r.value("counters", json::object()).dump().c_str());
+  EXPECT_LT(std::abs(r["counters"]["water volume change"].get<double>()), 1.0);  // per cent
+  // The grid's fields draw as the particles do (postprocess plot --phase grid).
+  const auto plot = swmpm::testing::swmpm_cmd("postprocess " + run + " plot --field phase_field --times 0.1 --phase grid -q", run);
+  EXPECT_EQ(plot.status, 0) << plot.err;
+  EXPECT_TRUE(std::filesystem::exists(run + "/plots/field_phase_field_0.1.png"));
 }
