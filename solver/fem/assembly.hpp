@@ -69,6 +69,36 @@ class NodeSystem {
     return c.start[b] + rank * B + a;
   }
 
+  /// Adds a cell's dense matrix Ae (row-major, (K B) x (K B), local unknown k B + a) and vector fe
+  /// to A and rhs; `node` the cell's K = S^Dim nodes, local k = s_0 + S s_1 (+ S^2 s_2). Cells of
+  /// one colour share no node, so calls for them may run in parallel.
+  template <int S, std::size_t K>
+  void add_cell(const std::array<std::size_t, K>& node, const double* Ae, const double* fe) {
+    std::array<int, Dim> s_of[K];
+    for (std::size_t k = 0; k < K; ++k) {
+      int r = static_cast<int>(k);
+      for (int a = 0; a < Dim; ++a) {
+        s_of[k][a] = r % S;
+        r /= S;
+      }
+    }
+    constexpr int KB = static_cast<int>(K) * B;
+    double* val = A.valuePtr();
+    for (std::size_t kb = 0; kb < K; ++kb) {
+      const Column col = column(node[kb]);
+      for (std::size_t ka = 0; ka < K; ++ka) {
+        std::array<int, Dim> d;
+        for (int a = 0; a < Dim; ++a) d[a] = s_of[ka][a] - s_of[kb][a];
+        for (int bb = 0; bb < B; ++bb) {
+          const int pos0 = position(col, d, 0, bb);
+          for (int aa = 0; aa < B; ++aa) val[pos0 + aa] += Ae[(static_cast<int>(ka) * B + aa) * KB + static_cast<int>(kb) * B + bb];
+        }
+      }
+    }
+    for (std::size_t ka = 0; ka < K; ++ka)
+      for (int aa = 0; aa < B; ++aa) rhs[static_cast<long>(node[ka]) * B + aa] += fe[ka * B + aa];
+  }
+
   void clear() {
     std::fill_n(A.valuePtr(), A.nonZeros(), 0.0);
     rhs.setZero();

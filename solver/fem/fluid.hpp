@@ -209,7 +209,6 @@ class Fluid {
     for (int a = 0; a < Dim; ++a) cells[a] = grid_->axis(a).cells;
     const int threads = omp_get_max_threads();
     if (static_cast<int>(local_.size()) < threads) local_.resize(threads);
-    double* val = sys_.A.valuePtr();
     double* rhs = sys_.rhs.data();
     for_each_cell_coloured<Dim, Shape::support>(cells, [&](const std::array<int, Dim>& cell) {
       Local& L = local_[omp_get_thread_num()];
@@ -314,28 +313,7 @@ class Fluid {
         for (int d = 0; d < Dim; ++d) fp += M.Pt[d] * M.rp.row(d).transpose();
         for (int k = 0; k < K; ++k) L.fe[k * B + Dim] = fp[k];
       }
-      // Scatter into the CSC values and the right-hand side (this colour's cells share no node).
-      std::array<int, Dim> s_of[K];
-      for (int k = 0; k < K; ++k) {
-        int rr = k;
-        for (int a = 0; a < Dim; ++a) {
-          s_of[k][a] = rr % Shape::support;
-          rr /= Shape::support;
-        }
-      }
-      for (int kb = 0; kb < K; ++kb) {
-        const auto col = sys_.column(L.c.node[kb]);
-        for (int ka = 0; ka < K; ++ka) {
-          std::array<int, Dim> d;
-          for (int a = 0; a < Dim; ++a) d[a] = s_of[ka][a] - s_of[kb][a];
-          for (int bb = 0; bb < B; ++bb) {
-            const int pos0 = System::position(col, d, 0, bb);
-            for (int aa = 0; aa < B; ++aa) val[pos0 + aa] += L.Ae[ka * B + aa][kb * B + bb];
-          }
-        }
-      }
-      for (int ka = 0; ka < K; ++ka)
-        for (int aa = 0; aa < B; ++aa) rhs[static_cast<long>(L.c.node[ka]) * B + aa] += L.fe[ka * B + aa];
+      sys_.template add_cell<Shape::support>(L.c.node, &L.Ae[0][0], L.fe);  // this colour's cells share no node
     });
     for (std::size_t i = 0; i < bcs_.face_load.size(); ++i)
       if (bcs_.face_load[i].squaredNorm() > 0.0)

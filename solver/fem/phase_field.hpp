@@ -137,8 +137,6 @@ class PhaseField {
     for (int a = 0; a < Dim; ++a) cells[a] = grid_->axis(a).cells;
     const int threads = omp_get_max_threads();
     if (static_cast<int>(local_.size()) < threads) local_.resize(threads);
-    double* val = sys_.A.valuePtr();
-    double* rhs = sys_.rhs.data();
     for_each_cell_coloured<Dim, Shape::support>(cells, [&](const std::array<int, Dim>& cell) {
       Local& L = local_[omp_get_thread_num()];
       basis_->eval(cell, L.c);
@@ -174,23 +172,7 @@ class PhaseField {
           L.fe[ka] += w * ph_a;
         }
       }
-      std::array<int, Dim> s_of[K];
-      for (int k = 0; k < K; ++k) {
-        int rr = k;
-        for (int a = 0; a < Dim; ++a) {
-          s_of[k][a] = rr % Shape::support;
-          rr /= Shape::support;
-        }
-      }
-      for (int kb = 0; kb < K; ++kb) {
-        const auto col = sys_.column(L.c.node[kb]);
-        for (int ka = 0; ka < K; ++ka) {
-          std::array<int, Dim> d;
-          for (int a = 0; a < Dim; ++a) d[a] = s_of[ka][a] - s_of[kb][a];
-          val[System::position(col, d, 0, 0)] += L.Ae[ka][kb];
-        }
-      }
-      for (int ka = 0; ka < K; ++ka) rhs[L.c.node[ka]] += L.fe[ka];
+      sys_.template add_cell<Shape::support>(L.c.node, &L.Ae[0][0], L.fe);  // this colour's cells share no node
     });
   }
 

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -38,6 +39,19 @@ inline std::string run_scene(const nlohmann::json& scene, const std::string& nam
   if (status) *status = rc;
   else EXPECT_EQ(rc, 0) << "solve failed for " << name;
   return run_dir;
+}
+
+/// RUN/monitors.csv (postprocess's reader: the header's names, a column each).
+inline post::Table read_monitors(const std::string& run) { return post::read_csv(run + "/monitors.csv"); }
+
+/// Terzaghi's series: p / p0 at depth z below the drained top of a layer of height H = 1 m.
+inline double terzaghi(double z, double Tv) {
+  double sum = 0.0;
+  for (int m = 0; m < 200; ++m) {
+    const double M = (2 * m + 1) * M_PI / 2;
+    sum += 2.0 / M * std::sin(M * z) * std::exp(-M * M * Tv);
+  }
+  return sum;
 }
 
 inline nlohmann::json load_json(const std::string& path) {

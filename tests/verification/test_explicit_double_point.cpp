@@ -19,20 +19,11 @@ namespace {
 
 using nlohmann::json;
 using swmpm::testing::load_json;
+using swmpm::testing::read_monitors;
+using swmpm::testing::terzaghi;
 using swmpm::testing::run_scene;
 
-/// RUN/monitors.csv (postprocess's reader: the header's names, a column each).
-swmpm::post::Table read_monitors(const std::string& run) { return swmpm::post::read_csv(run + "/monitors.csv"); }
 
-/// Terzaghi: p / p0 at depth z below the drained top of a layer of height H = 1 m.
-double terzaghi(double z, double Tv) {
-  double sum = 0.0;
-  for (int m = 0; m < 200; ++m) {
-    const double M = (2 * m + 1) * M_PI / 2;
-    sum += 2.0 / M * std::sin(M * z) * std::exp(-M * M * Tv);
-  }
-  return sum;
-}
 
 }  // namespace
 

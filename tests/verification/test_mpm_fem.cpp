@@ -18,19 +18,11 @@ namespace {
 using nlohmann::json;
 using swmpm::testing::last_frame;
 using swmpm::testing::load_json;
+using swmpm::testing::read_monitors;
+using swmpm::testing::terzaghi;
 using swmpm::testing::run_scene;
 
-swmpm::post::Table read_monitors(const std::string& run) { return swmpm::post::read_csv(run + "/monitors.csv"); }
 
-/// Terzaghi: p / p0 at depth z below the drained top of a layer of height H = 1 m.
-double terzaghi(double z, double Tv) {
-  double sum = 0.0;
-  for (int m = 0; m < 200; ++m) {
-    const double M = (2 * m + 1) * M_PI / 2;
-    sum += 2.0 / M * std::sin(M * z) * std::exp(-M * M * Tv);
-  }
-  return sum;
-}
 
 /// D1's monitors against the series: the largest RMS of p/p0 over the gauges at Tv >= 0.05.
 /// n = 0.4, kappa = 1.0214e-10 m^2, mu = 1.002e-3 Pa s (k = 1.0e-3 m/s), E = 10 MPa, nu = 0.2, the

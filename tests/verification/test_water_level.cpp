@@ -26,6 +26,7 @@ namespace {
 
 using nlohmann::json;
 using swmpm::testing::load_json;
+using swmpm::testing::read_monitors;
 using swmpm::testing::run_scene;
 
 constexpr double H = 0.3;          // m, depth of the pond
@@ -47,8 +48,6 @@ json pond(int dim) {
   return j;
 }
 
-/// RUN/monitors.csv (postprocess's reader: the header's names, a column each).
-swmpm::post::Table read_monitors(const std::string& run) { return swmpm::post::read_csv(run + "/monitors.csv"); }
 
 void pond_at_rest_reads_its_depth(int dim) {
   const std::string run = run_scene(pond(dim), "water-level-" + std::to_string(dim) + "d");
