@@ -664,7 +664,7 @@ const Table& initialisation_table() {
            .meaning = "Material parameters in place of the scene's while the phase runs, by material name: "
                       "`{\"sand\": {\"cohesion\": 1e5}}` (e.g. a large cohesion while gravity grows, c = 0 from "
                       "t = 0, as seed 004 does). Only the parameters of the material's constitutive model "
-                      "(elasticity, strength, Nor-Sand tables); every formulation but mpm-fem, which refuses it for now.",
+                      "(elasticity, strength, Nor-Sand tables); every formulation.",
            .type_text = "object of objects", .expect = "an object of objects: material name -> {parameter: number}",
            .allowed = "solid materials' model parameters", .default_text = "none",
            .check = check_phase_materials},

@@ -18,7 +18,20 @@ Direct<M>::Direct() : impl_(std::make_unique<Impl>()) {
   // UMFPACK refines each solve iteratively by default (up to 2 steps, each a product with A and
   // a solve): a caller that reuses a factor as a Krylov preconditioner refines already, so the
   // solve is the plain forward and back substitution.
-  if constexpr (M == Method::lu) impl_->solver.umfpackControl()(UMFPACK_IRSTEP) = 0;
+  //
+  // The ordering: the v-p systems of mpm-fem are structurally symmetric, and UMFPACK's symmetric
+  // strategy (AMD or METIS on A + A^T, diagonal pivots preferred) with its "best" ordering (it
+  // tries several and keeps the one of least fill) leaves fewer entries in L + U than the default
+  // unsymmetric COLAMD: on the 81 x 41-node grid of examples/column-in-water-and-air-mpm-fem
+  // (9,963 unknowns) 4.04e6 against 5.49e6, and each substitution streams the whole factor, so
+  // its solves took 33 % less time (3.61 s against 5.36 s over 100 steps, 1 thread). The ordering
+  // is chosen once, in the symbolic analysis.
+  if constexpr (M == Method::lu) {
+    auto& control = impl_->solver.umfpackControl();
+    control(UMFPACK_IRSTEP) = 0;
+    control(UMFPACK_STRATEGY) = UMFPACK_STRATEGY_SYMMETRIC;
+    control(UMFPACK_ORDERING) = UMFPACK_ORDERING_BEST;
+  }
 }
 template <Method M>
 Direct<M>::~Direct() = default;
