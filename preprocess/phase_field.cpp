@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "preprocess/initial_state.hpp"
+#include "scene/expression.hpp"
 #include "preprocess/preprocess.hpp"
 #include "solver/grid/grid.hpp"
 #include "solver/porous/free_surface.hpp"
@@ -78,9 +79,17 @@ InitialPhaseField phase_field(const scene::Scene& s, const std::vector<SeedPoint
   constexpr int kGauss = kGimp ? 1 : 2;  // points per axis
   const double gauss = 0.5 / std::sqrt(3.0);  // offset of the 2-point rule, in units of the box's side
   std::vector<double> volume(g.num_nodes(), 0.0);
+  std::vector<Vec<Dim>> momentum(g.num_nodes(), Vec<Dim>::Zero());  // m^(Dim+1)/s: sum of N v over the water
   shape::ShapeData<Dim, Shape::support, false> sd;
   for (std::size_t p = 0; p < points.size(); ++p) {
     if (!wet[p]) continue;
+    // The water's initial velocity: its body's `initial.velocity` (the pore water of a saturated
+    // body moves with its skeleton; a dry body's submerged pores hold water at rest).
+    Vec<Dim> v = Vec<Dim>::Zero();
+    const auto& body = s.bodies[static_cast<std::size_t>(points[p].body)];
+    if (!body.fluid.empty())
+      for (int a = 0; a < Dim; ++a)
+        v[a] = scene::evaluate_expression(body.initial.velocity[static_cast<std::size_t>(a)], points[p].x[0], points[p].x[1], points[p].x[2]);
     const double side = points[p].spacing, w = std::pow(side, Dim) / std::pow(kGauss, Dim);  // m, m^Dim
     for (int q = 0; q < (kGimp ? 1 : 1 << Dim); ++q) {  // the Gauss points, bit a: the side along axis a
       Vec<Dim> x, l;
@@ -89,17 +98,24 @@ InitialPhaseField phase_field(const scene::Scene& s, const std::vector<SeedPoint
         l[a] = kGimp ? 0.5 * side : 0.0;  // GIMP: the domain's half-size, as the solver reads it
       }
       shape::evaluate<Shape>(g, x, l, sd);
-      shape::for_each_node(g, sd, [&](std::size_t i, double N, const auto&) { volume[i] += N * w; });
+      shape::for_each_node(g, sd, [&](std::size_t i, double N, const auto&) {
+        volume[i] += N * w;
+        momentum[i] += N * w * v;
+      });
     }
   }
   InitialPhaseField out;
   for (int a = 0; a < Dim; ++a) out.lattice[static_cast<std::size_t>(a)] = g.nodes_per_axis()[static_cast<std::size_t>(a)];
   out.nodes.points.resize(g.num_nodes());
   auto& phi = out.nodes.add("phi", 1);
+  auto& velocity = out.nodes.add("velocity", 3);
+  velocity.values.assign(3 * g.num_nodes(), 0.0);
   g.for_each_node(g.all_nodes(), [&](std::size_t i, const std::array<int, Dim>& ijk) {
     const Vec<Dim> xi = g.node_position(ijk);
     for (int a = 0; a < Dim; ++a) out.nodes.points[i][static_cast<std::size_t>(a)] = xi[a];
     phi.values[i] = std::min(1.0, volume[i] / porous::basis_integral<Shape>(g, i));
+    if (volume[i] > 0.0)
+      for (int a = 0; a < Dim; ++a) velocity.values[3 * i + static_cast<std::size_t>(a)] = momentum[i][a] / volume[i];
   });
   return out;
 }

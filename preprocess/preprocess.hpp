@@ -50,8 +50,11 @@ scene::PointCloud surface_samples(const scene::Scene& s, const std::vector<std::
 /// lie below the water on their vertical line: below the top y_q + l_q of the highest
 /// water-bearing point q within half a cell in x (and z in 3D), h/2 widened by 1e-9 of itself as
 /// the water_level gauge does: pores below the water are full of it.
+/// The array `velocity` (3 components, m/s) is the water's initial velocity at each node, the
+/// average of its bodies' `initial.velocity` weighted as phi is, sum_p int N_I v_p / sum_p int N_I
+/// (zero where no water is; the submerged pores of a dry body hold water at rest).
 struct InitialPhaseField {
-  scene::PointCloud nodes;          // the grid's nodes, array `phi`
+  scene::PointCloud nodes;          // the grid's nodes, arrays `phi` and `velocity`
   std::array<int, 3> lattice{1, 1, 1};  // nodes per axis (1 for the axis a 2D grid lacks)
 };
 InitialPhaseField initial_phase_field(const scene::Scene& s, const std::vector<SeedPoint>& points);

@@ -99,6 +99,12 @@ class NodeSystem {
       for (int aa = 0; aa < B; ++aa) rhs[static_cast<long>(node[ka]) * B + aa] += fe[ka * B + aa];
   }
 
+  /// A(r, r) += v for unknown r = I B + a.
+  void add_diagonal(std::size_t I, int a, double v) {
+    const Column col = column(I);
+    A.valuePtr()[position(col, std::array<int, Dim>{}, a, a)] += v;
+  }
+
   void clear() {
     std::fill_n(A.valuePtr(), A.nonZeros(), 0.0);
     rhs.setZero();

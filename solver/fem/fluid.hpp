@@ -111,6 +111,14 @@ class Fluid {
     /// Per node: -p_bar n_out int N dGamma over faces with a prescribed pressure (N, per unit
     /// porosity): the boundary term of the pressure's integration by parts, times n_I each step.
     std::vector<Vec<Dim>> face_load;
+    /// The nodes on faces with a prescribed pressure (open boundaries), for the backflow term.
+    struct OpenNode {
+      std::size_t node;
+      int axis;
+      double sign;  // the outward normal is sign e_axis
+      double area;  // m (2D, per metre) or m^2: int N_I dGamma over the face
+    };
+    std::vector<OpenNode> open;
   };
 
   void setup(const Grid<Dim>& g, const FluidProperties& props, Conditions bcs) {
@@ -198,6 +206,17 @@ class Fluid {
   bool implicit_drag = true;
   /// The shock-capturing (grad-div) coefficient's floor, in units of h^2 / (4 Dim tau_m) (0: the seed's).
   double min_grad_div = 1.0;
+  /// s: the time step in PSPG's tau_m is at least this (0: the seed's eq. 26 as it stands). With
+  /// tau_m ~ dt/2 the pressure's stabilisation fades as dt shrinks, and well below the free
+  /// surface's own time scale sqrt(h / g) the quadratic B-splines' equal-order pressure shows a
+  /// row-to-row mode (the small-time-step weakness of PSPG, Bochev, Gunzburger & Shadid 2004):
+  /// a surge of 0.15 m of water over a floor, h = 0.01 m, had a checkerboard indicator of 0.30 at
+  /// dt = 0.17 ms (dt = sqrt(h/g) / 190) against 0.03 at 1 ms. A larger tau_p lets the phase
+  /// field's blended density drive more flow at the surface of water at rest (1.5e-4 m/s at
+  /// floor 0, 2.4e-4 at sqrt(h/g) / 10, 4.8e-4 at sqrt(h/g); test_fem.cpp), so mpm-fem sets the
+  /// floor at sqrt(h / |g|) / 40: the surge's indicator 0.03 at 0.17 ms, the water at rest 1.6e-4
+  /// m/s. SUPG keeps eq. 26's tau.
+  double pspg_time_floor = 0.0;
   double seconds_assemble = 0.0, seconds_factorise = 0.0, seconds_solve = 0.0;
 
  private:
@@ -228,8 +247,11 @@ class Fluid {
         fields_at(L.c, gp, soil, f);
         const double w = L.c.JxW[gp];
         const double nu = f.mu / f.rho, speed = f.vbar.norm();
-        const double tau = 1.0 / std::sqrt(4.0 / (dt * dt) + 4.0 * speed * speed / (h * h) +
-                                           16.0 * nu * nu / (h * h * h * h));  // eq. 26
+        const double steady = 4.0 * speed * speed / (h * h) + 16.0 * nu * nu / (h * h * h * h);
+        const double tau = 1.0 / std::sqrt(4.0 / (dt * dt) + steady);  // eq. 26
+        // PSPG's tau: eq. 26 with dt no smaller than pspg_time_floor (see there).
+        const double dt_p = std::max(dt, pspg_time_floor);
+        const double tau_p = dt_p > dt ? 1.0 / std::sqrt(4.0 / (dt_p * dt_p) + steady) : tau;
         const double Re = speed * h / (2.0 * nu);                                // eq. 28
         // eqs. 27, 29; at least h^2 / (4 Dim tau_m) (Bazilevs et al. 2007's tau_C on this grid): the
         // seed's vanishes with the speed, and a slow through-flow kept a row-to-row velocity mode of
@@ -252,7 +274,7 @@ class Fluid {
             pspg == Pspg::residual ? r : Vec<Dim>(W * (f.v / dt - 0.5 * f.grad_v * f.vbar) + cdi * f.v + static_part);
         const double div_nv = f.n * f.grad_v.trace() + f.grad_n.dot(f.v);     // div(n v^L)
         const double div_svs = (1.0 - f.n) * f.div_vs - f.grad_n.dot(f.vs);  // div((1 - n) v_s)
-        const double visc = 0.5 * f.mu * f.n, lsic = 0.5 * tau_c * f.rho, pspg_w = tau / f.rho;
+        const double visc = 0.5 * f.mu * f.n, lsic = 0.5 * tau_c * f.rho, pspg_w = tau_p / f.rho;
         for (int k = 0; k < K; ++k) {
           const double N = L.c.N[gp][k];
           const Vec<Dim>& dN = L.c.dN[gp][k];
@@ -315,6 +337,19 @@ class Fluid {
       }
       sys_.template add_cell<Shape::support>(L.c.node, &L.Ae[0][0], L.fe);  // this colour's cells share no node
     });
+    // Backflow stabilisation on open faces (Bazilevs, Gohean, Hughes, Moser & Zhang 2009, their
+    // eq. 4 with beta = 1, lumped at the face's nodes): where the fluid enters through a face
+    // with a prescribed pressure, vbar.n_out < 0, the convective term's boundary flux
+    // 1/2 rho (v.n) |v|^2 would bring in kinetic energy that nothing bounds (the air sucked in
+    // through the open top behind a falling water jet ran away to 255 m/s in 0.035 s); the term
+    // -int rho n {vbar.n}_- w.v^{L+1} dGamma takes it out again and vanishes on outflow.
+    for (const auto& o : bcs_.open) {
+      const std::size_t i = o.node;
+      const double un = o.sign * (1.5 * v[i][o.axis] - 0.5 * v_old[i][o.axis]);
+      if (!(un < 0.0)) continue;
+      const double rho = props_.rho_a + std::clamp(phi[i], 0.0, 1.0) * (props_.rho_w - props_.rho_a);
+      for (int a = 0; a < Dim; ++a) sys_.add_diagonal(i, a, soil.n[i] * rho * (-un) * o.area);
+    }
     for (std::size_t i = 0; i < bcs_.face_load.size(); ++i)
       if (bcs_.face_load[i].squaredNorm() > 0.0)
         for (int a = 0; a < Dim; ++a) rhs[static_cast<long>(i) * B + a] += soil.n[i] * bcs_.face_load[i][a];

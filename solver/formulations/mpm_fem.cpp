@@ -111,11 +111,19 @@ class MpmFem final : public Formulation<Dim> {
     const auto& pspg = s.solver.stabilisation.pressure;
     fluid_.pspg = pspg == "pspg-increment" ? fem::Fluid<Dim, Shape>::Pspg::increment : fem::Fluid<Dim, Shape>::Pspg::residual;
     fluid_.implicit_drag = s.solver.drag_integration != "explicit";
+    // PSPG's time step at least sqrt(h / |g|) / 40 (fluid.hpp, pspg_time_floor; none without gravity).
+    double g2 = 0.0;
+    for (double ga : s.gravity) g2 += ga * ga;
+    fluid_.pspg_time_floor = g2 > 0.0 ? std::sqrt(grid_.h() / std::sqrt(g2)) / 40.0 : 0.0;
     // The phase field: preprocess's nodal phi (particles/phase_field.vtu).
     if (state.phase_field.points.size() == grid_.num_nodes()) {
       const auto* phi = state.phase_field.find("phi");
       if (!phi) throw std::runtime_error("particles/phase_field.vtu has no array \"phi\"");
       for (std::size_t i = 0; i < grid_.num_nodes(); ++i) fluid_.phi[i] = phi->values[i];
+      // The water's initial velocity (bodies' initial.velocity; older runs have none: at rest).
+      if (const auto* v = state.phase_field.find("velocity"))
+        for (std::size_t i = 0; i < grid_.num_nodes(); ++i)
+          for (int a = 0; a < Dim; ++a) fluid_.v[i][a] = fluid_.v_old[i][a] = v->values[3 * i + a];
     } else if (!state.phase_field.points.empty()) {
       throw std::runtime_error("particles/phase_field.vtu holds " + std::to_string(state.phase_field.points.size()) +
                                " nodes, the grid " + std::to_string(grid_.num_nodes()) + ": run swmpm preprocess again");
@@ -408,6 +416,10 @@ class MpmFem final : public Formulation<Dim> {
         bc.fixed[i] |= bits;
         if (bits >> Dim & 1) bc.p_value[i] = value;
       });
+      if (bits >> Dim & 1)  // an open face: the backflow term (fluid.hpp) at its nodes
+        grid_.for_each_node(face, [&](std::size_t i, const auto&) {
+          bc.open.push_back({i, axis, side == 0 ? -1.0 : 1.0, porous::basis_integral<Shape>(grid_, i, axis)});
+        });
       if (value != 0.0) pressure_faces_.push_back({axis, side, value});
       // A prescribed p != 0 pushes on the fluid through the face: the boundary term of the
       // pressure's integration by parts, -int N_I n p n_out dGamma (eq. 20's right-hand side).

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "support/dam_break.hpp"
 #include "support/run_helpers.hpp"
 
 namespace {
@@ -127,23 +128,6 @@ TEST(MpmFem, ThroughFlowFollowsTheDragLaw) {
   }
 }
 
-namespace {
-
-/// The surge front of a grid frame: the largest x where phi = 1/2 on the lowest row of nodes above
-/// the floor (y = h/2), interpolated between the nodes.
-double front_of(const swmpm::scene::PointCloud& grid, double h) {
-  const auto* phi = grid.find("phase_field");
-  std::vector<std::pair<double, double>> row;  // (x, phi)
-  for (std::size_t i = 0; i < grid.points.size(); ++i)
-    if (std::abs(grid.points[i][1] - 0.5 * h) < 1e-9) row.emplace_back(grid.points[i][0], phi->values[i]);
-  std::sort(row.begin(), row.end());
-  for (std::size_t k = row.size() - 1; k > 0; --k)
-    if (row[k - 1].second >= 0.5 && row[k].second < 0.5)
-      return row[k - 1].first + (row[k - 1].second - 0.5) / (row[k - 1].second - row[k].second) * (row[k].first - row[k - 1].first);
-  return row.empty() || row.back().second < 0.5 ? 0.0 : row.back().first;
-}
-
-}  // namespace
 
 // Dam break: a column of water a = 57.15 mm wide and 2a high collapses onto a dry floor (the
 // grid's phase field, h = a/10). The front against Martin & Moyce (1952), Table 2, at
@@ -151,28 +135,9 @@ double front_of(const swmpm::scene::PointCloud& grid, double h) {
 TEST(MpmFem, DamBreakFrontFollowsMartinAndMoyce) {
   const std::string dir = SWMPM_SOURCE_DIR "/examples/dam-break-mpm-fem/";
   const std::string run = run_scene(load_json(dir + "scene.json"), "mpmfem-dam-break");
-  const auto mm = swmpm::post::read_reference(dir + "martin-moyce-1952-front.csv");
-  const double a = 0.05715, g = 9.81, h = 0.005715;
-  int compared = 0;
-  double worst = 0.0;
-  for (const auto& e : swmpm::scene::read_pvd(run + "/output/results.pvd")) {
-    if (e.group != "grid") continue;
-    const double T = e.time * std::sqrt(2 * g / a);
-    if (T < 1.0 || T > mm.t.back()) continue;
-    const double x = front_of(swmpm::scene::read_vtu(run + "/output/" + e.file), h);
-    double Z = 0.0;
-    for (std::size_t k = 1; k < mm.t.size(); ++k)
-      if (T <= mm.t[k]) {
-        Z = mm.v[k - 1] + (mm.v[k] - mm.v[k - 1]) * (T - mm.t[k - 1]) / (mm.t[k] - mm.t[k - 1]);
-        break;
-      }
-    const double err = (x / a - Z) / Z;
-    std::printf("dam break: T = %.2f, x/a = %.3f, Martin & Moyce %.3f (%+.1f %%)\n", T, x / a, Z, 100 * err);
-    worst = std::max(worst, std::abs(err));
-    ++compared;
-  }
-  EXPECT_GE(compared, 6);
-  EXPECT_LT(worst, 0.10);
+  const auto front = swmpm::testing::dam_break_front_error(run, dir + "martin-moyce-1952-front.csv", "dam break");
+  EXPECT_GE(front.compared, 6);
+  EXPECT_LT(front.worst, 0.10);
   const json r = load_json(run + "/run.json");
   std::printf("dam break: run.json counters %s\n", r.value("counters", json::object()).dump().c_str());
   EXPECT_LT(std::abs(r["counters"]["water volume change"].get<double>()), 1.0);  // per cent
