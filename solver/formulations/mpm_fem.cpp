@@ -158,7 +158,7 @@ class MpmFem final : public Formulation<Dim> {
     if (ps.size() > 0 && reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval))
       lap("reorder");                                                                          // (0)
     soil_to_grid(st, ctx, b);                                                                  // (i)-(ii)
-    if (water_volume0_ < 0.0) water_volume0_ = phase_.volume(fluid_.phi, soil_.n);  // int n phi at t = 0
+    if (water_volume0_ < 0.0) water_target_ = water_volume0_ = phase_.volume(fluid_.phi, soil_.n);  // int n phi at t = 0
     lap("soil p2g");
 
     const double a0 = fluid_.seconds_assemble, f0 = fluid_.seconds_factorise, s0 = fluid_.seconds_solve;
@@ -171,8 +171,13 @@ class MpmFem final : public Formulation<Dim> {
     this->times_.add("fluid solve", fluid_.seconds_solve - s0);
     lap.restart();
     check_fluid(st);
-    if (phase_.step(fluid_.phi, fluid_.v, soil_.n, dt) < 0)                                    // (iv)
+    // The water's volume: what it was, less what flowed out through open faces this step
+    // (sum over their nodes of n phi v.n_out int N dGamma).
+    for (const auto& o : fluid_.conditions().open)
+      water_target_ -= dt * soil_.n[o.node] * std::clamp(fluid_.phi[o.node], 0.0, 1.0) * o.sign * fluid_.v[o.node][o.axis] * o.area;
+    if (phase_.step(fluid_.phi, fluid_.v, soil_.n, dt, water_target_) < 0)                     // (iv)
       st.health.report_node(0, {0, 0, 0}, "fluid", "the phase field's solve did not converge");
+    water_corrected_ += phase_.last_corrected_volume;
     lap("phase field");
 
     if (ps.size() == 0) return;
@@ -350,7 +355,9 @@ class MpmFem final : public Formulation<Dim> {
     return {{"fluid factorisations", static_cast<double>(fluid_.factorisations()), ""},
             {"fluid Krylov iterations per step",
              fluid_.solves > 0 ? static_cast<double>(fluid_.krylov_iterations) / static_cast<double>(fluid_.solves) : 0.0, ""},
-            {"water volume change", water_volume0_ > 0.0 ? (V - water_volume0_) / water_volume0_ * 100.0 : 0.0, "%"}};
+            {"water volume change", water_volume0_ > 0.0 ? (V - water_target_) / water_volume0_ * 100.0 : 0.0, "%"},
+            {"water volume corrected", water_volume0_ > 0.0 ? water_corrected_ / water_volume0_ * 100.0 : 0.0, "%"},
+            {"water outflow", water_volume0_ > 0.0 ? (water_volume0_ - water_target_) / water_volume0_ * 100.0 : 0.0, "%"}};
   }
 
   // Restart: the fluid's nodal state (v^L, v^{L-1}, p, phi) and the schedule order. The LU factor
@@ -362,7 +369,7 @@ class MpmFem final : public Formulation<Dim> {
     c.put("formulation/fluid_v_old", fluid_.v_old);
     c.put("formulation/fluid_p", fluid_.p);
     c.put("formulation/phi", fluid_.phi);
-    c.put("formulation/water_volume0", std::vector<double>{water_volume0_});
+    c.put("formulation/water_volume0", std::vector<double>{water_volume0_, water_target_, water_corrected_});
     fluid_.refactorise();
   }
   void restore(const Checkpoint& c, State<Dim>& st) override {
@@ -375,6 +382,8 @@ class MpmFem final : public Formulation<Dim> {
     std::vector<double> v0;
     c.get("formulation/water_volume0", v0);
     water_volume0_ = v0.empty() ? -1.0 : v0[0];
+    water_target_ = v0.size() > 1 ? v0[1] : water_volume0_;
+    water_corrected_ = v0.size() > 2 ? v0[2] : 0.0;
     fluid_.refactorise();
   }
 
@@ -670,6 +679,8 @@ class MpmFem final : public Formulation<Dim> {
   fem::PhaseField<Dim, Shape> phase_;
   double phase_mobility_ = 0.0;   // 1/s, M_phi
   double water_volume0_ = -1.0;  // m^Dim, int n phi at the first step (-1 before it)
+  double water_target_ = -1.0;   // m^Dim, water_volume0_ less the outflow through open faces so far
+  double water_corrected_ = 0.0;  // m^Dim, the phase field's volume corrections summed
   fem::SoilOnGrid<Dim> soil_;
   NodeFields<Dim> solid_;
   std::vector<SoilSums> sums_;
