@@ -172,8 +172,17 @@ std::vector<std::string> plot_monitors(const std::string& run_dir, const std::ve
        << "set multiplot layout " << rows << ",1 title " << quoted("monitor " + monitor + " (" + run_dir + ")") << "\n";
     for (std::size_t c : panel_cols) {
       const std::string quantity = t.names[c].substr(monitor.size() + 1);
-      gp << "set xlabel 'time [s]'\nset ylabel " << quoted(label(quantity, dim)) << "\n"
-         << "plot " << quoted(run_data.string()) << " using 1:" << c + 1 << " with lines lw 2 lc rgb '#1b6ca8' title "
+      gp << "set xlabel 'time [s]'\nset ylabel " << quoted(label(quantity, dim)) << "\n";
+      // A column without a finite value (a water_level gauge whose line never held water): an
+      // empty panel that says so (gnuplot refuses to plot nothing).
+      if (std::none_of(t.columns[c].begin(), t.columns[c].end(), [](double v) { return std::isfinite(v); })) {
+        const double t0 = t.columns[0].empty() ? 0.0 : t.columns[0].front(), t1 = t.columns[0].empty() ? 1.0 : t.columns[0].back();
+        gp << "set label 1 " << quoted(t.names[c] + ": no finite value in the run") << " at graph 0.5, 0.5 center\n"
+           << "unset key\nplot [" << t0 << ":" << (t1 > t0 ? t1 : t0 + 1.0) << "] [0:1] NaN notitle\n"
+           << "unset label 1\nset key top right opaque box\n";
+        continue;
+      }
+      gp << "plot " << quoted(run_data.string()) << " using 1:" << c + 1 << " with lines lw 2 lc rgb '#1b6ca8' title "
          << quoted(t.names[c] + " (run)");
       for (const auto& [data, title] : overlays[t.names[c]])
         gp << ", " << quoted(data.string()) << " using 1:2 with linespoints dt 2 lw 1.5 pt 6 ps 0.8 lc rgb '#d95f02' title "

@@ -209,3 +209,17 @@ TEST(MpmFem, SlowD3ColumnHalfInWaterHalfInAir) {
   EXPECT_LT(crest, -0.02);
   EXPECT_GT(runout, 0.18);
 }
+
+// A water_level gauge whose vertical line holds no water for the whole run (the dam break cut at
+// 0.01 s: the surge has not reached x = 2a) has only NaN in monitors.csv; postprocess plot draws an
+// empty panel that says so (gnuplot failed on it, exit 1).
+TEST(MpmFem, GaugeThatNeverSeesWaterPlotsAnEmptyPanel) {
+  json s = load_json(SWMPM_SOURCE_DIR "/examples/dam-break-mpm-fem/scene.json");
+  s["time"]["end"] = 0.01;
+  const std::string run = run_scene(s, "mpmfem-dry-gauge");
+  const auto mon = read_monitors(run);
+  for (double v : mon.column("gauge_2a.water_level")) ASSERT_TRUE(std::isnan(v));
+  const auto plot = swmpm::testing::swmpm_cmd("postprocess " + run + " plot -q", run);
+  EXPECT_EQ(plot.status, 0) << plot.err;
+  EXPECT_TRUE(std::filesystem::exists(run + "/plots/gauge_2a.png"));
+}
