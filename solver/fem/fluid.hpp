@@ -65,14 +65,16 @@ struct FluidProperties {
 
 /// The soil as the fluid sees it, per node (seed §"Mapping of state variables at node"): porosity
 /// n (eq. 81, 1 where no soil), solid volume fraction theta (eq. 79), intrinsic permeability k [m^2]
-/// (eq. 78; 0 where no soil), and the soil's velocity v_s [m/s] (eq. 77).
+/// (eq. 78; 0 where no soil), the soil's velocity v_s [m/s] (eq. 77), and its partial density
+/// rho_p = (1 - n) rho_s [kg/m^3] (the lumped mass over the node's support; 0 where no soil).
 template <int Dim>
 struct SoilOnGrid {
-  std::vector<double> n, theta, k;
+  std::vector<double> n, theta, k, rho_p;
   std::vector<Vec<Dim>> vs;
   void resize(std::size_t nodes) {
     n.assign(nodes, 1.0);
     theta.assign(nodes, 0.0);
+    rho_p.assign(nodes, 0.0);
     k.assign(nodes, 0.0);
     vs.assign(nodes, Vec<Dim>::Zero());
   }
@@ -81,7 +83,7 @@ struct SoilOnGrid {
 /// What the fields are at one Gauss point.
 template <int Dim>
 struct FluidPoint {
-  double n, theta, k, phi, rho, mu;
+  double n, theta, k, phi, rho, mu, rho_p;
   Vec<Dim> grad_n, vbar, v, vs;
   MatD<Dim> grad_v;  // (grad v)_ij = d v_i / d x_j, of v^L
   double div_vs;
@@ -163,7 +165,7 @@ class Fluid {
 
   /// The fields at Gauss point gp of cell `c` (v^L, vbar of v^L and v^{L-1}).
   void fields_at(const typename Basis::Cell& c, int gp, const SoilOnGrid<Dim>& soil, FluidPoint<Dim>& f) const {
-    f.n = f.theta = f.k = f.phi = f.div_vs = 0.0;
+    f.n = f.theta = f.k = f.phi = f.div_vs = f.rho_p = 0.0;
     f.grad_n.setZero();
     f.vbar.setZero();
     f.v.setZero();
@@ -177,6 +179,7 @@ class Fluid {
       f.grad_n += soil.n[i] * dN;
       f.theta += N * soil.theta[i];
       f.k += N * soil.k[i];
+      f.rho_p += N * soil.rho_p[i];
       f.phi += N * phi[i];
       f.vbar += N * (1.5 * v[i] - 0.5 * v_old[i]);
       f.v += N * v[i];
@@ -217,6 +220,21 @@ class Fluid {
   /// floor at sqrt(h / |g|) / 40: the surge's indicator 0.03 at 0.17 ms, the water at rest 1.6e-4
   /// m/s. SUPG keeps eq. 26's tau.
   double pspg_time_floor = 0.0;
+  /// The continuity takes the skeleton's response to the step's pressure change into account:
+  /// the soil moves with p^{L+1} only after the fluid is solved (the seed's staggered steps iii and
+  /// v), so the water a moving skeleton displaces is pushed by a pressure the skeleton has not
+  /// felt yet. Its inertia is the added mass rho_w (1 - n)^2 / n against the skeleton's own
+  /// (1 - n) rho_s, and where the added mass is the larger (n below about rho_w / (rho_w + rho_s),
+  /// 0.28 for quartz) the staggered scheme is unstable at any dt: a block with n = 0.1 under water
+  /// diverged in 10 steps (n = 0.2 in 20, n = 0.3 in 130; n = 0.4 ran), whatever its permeability,
+  /// stiffness or drag treatment (the added-mass instability of partitioned fluid-structure
+  /// coupling, Causin, Gerbeau & Nobile 2005). The skeleton's velocity change from a pressure
+  /// change dp, with its drag implicit, is -dt (1 - n) grad dp / ((1 - n) rho_s + dt c); its
+  /// divergence in the continuity adds
+  ///   + int kappa_s grad q . grad (p^{L+1} - p^L),   kappa_s = dt (1 - n)^2 / ((1 - n) rho_s + dt c)
+  /// (the p^L part on the right-hand side), which vanishes in a steady state and where no soil is
+  /// (a fixed-stress-like split).
+  bool soil_response = true;
   double seconds_assemble = 0.0, seconds_factorise = 0.0, seconds_solve = 0.0;
 
  private:
@@ -265,6 +283,9 @@ class Fluid {
         const double dt_p = std::max(dt, pspg_time_floor);
         const double tau_p = dt_p > dt ? 1.0 / std::sqrt(4.0 / (dt_p * dt_p) + steady + cd * cd / (W * W)) : tau;
         const double cdi = implicit_drag ? cd : 0.0;
+        // The skeleton's response to this step's pressure change (see soil_response):
+        // kappa_s = dt (1 - n)^2 / ((1 - n) rho_s + dt c)  [m^3 s / kg].
+        const double kappa_s = soil_response && f.rho_p > 0.0 ? dt * (1.0 - f.n) * (1.0 - f.n) / (f.rho_p + dt * cd) : 0.0;
         // The residual's explicit part r = n rho (v^L/dt - 1/2 vbar.grad v^L + b) - P^(L); with
         // the drag implicit, P^ = c (v^{L+1} - v_s^L) (c at L): c v_s^L here, c N_b on the left.
         const Vec<Dim> r = W * (f.v / dt - 0.5 * f.grad_v * f.vbar + b) - (implicit_drag ? Vec<Dim>(-cd * f.vs) : Vec<Dim>(cd * rel));
@@ -297,12 +318,17 @@ class Fluid {
             M.Vt[d](k, gp) = w * visc * dN[d];
             M.Lt[d](k, gp) = w * lsic * dN[d];
             M.Pt[d](k, gp) = w * pspg_w * dN[d];
+            M.St_s[d](k, gp) = w * kappa_s * dN[d];
           }
         }
         // right-hand sides per g: the momentum's (N_a + s_a) r_i - 1/2 mu n grad N_a . grad v_i^L -
         // tau_c rho d_i N_a (1/2 div(n v^L) + div((1 - n) v_s)); the continuity's
         // -N_a div((1 - n) v_s) + pi_a . r_pspg
+        Vec<Dim> grad_p_old = Vec<Dim>::Zero();
+        if (soil_response)
+          for (int k = 0; k < K; ++k) grad_p_old += p[L.c.node[k]] * L.c.dN[gp][k];
         for (int d = 0; d < Dim; ++d) {
+          M.gp_old(d, gp) = grad_p_old[d];
           M.r(d, gp) = r[d];
           M.rp(d, gp) = r_pspg[d];
           M.gv[d].col(gp) = f.grad_v.row(d).transpose();
@@ -318,7 +344,10 @@ class Fluid {
         return vis;
       }();
       typename Local::MatKK pp = Local::MatKK::Zero();
-      for (int d = 0; d < Dim; ++d) pp.noalias() += M.Pt[d].lazyProduct(M.nD[d].transpose());
+      for (int d = 0; d < Dim; ++d) {
+        pp.noalias() += M.Pt[d].lazyProduct(M.nD[d].transpose());
+        if (soil_response) pp.noalias() += M.St_s[d].lazyProduct(M.Dm[d].transpose());
+      }
       for (int i = 0; i < Dim; ++i) {
         for (int j = 0; j < Dim; ++j) {
           typename Local::MatKK blk = M.Lt[i].lazyProduct(M.Cm[j].transpose());
@@ -336,7 +365,10 @@ class Fluid {
       }
       {
         Eigen::Matrix<double, K, 1> fp = -M.Nt * M.svs;
-        for (int d = 0; d < Dim; ++d) fp += M.Pt[d] * M.rp.row(d).transpose();
+        for (int d = 0; d < Dim; ++d) {
+          fp += M.Pt[d] * M.rp.row(d).transpose();
+          if (soil_response) fp += M.St_s[d] * M.gp_old.row(d).transpose();
+        }
         for (int k = 0; k < K; ++k) L.fe[k * B + Dim] = fp[k];
       }
       sys_.template add_cell<Shape::support>(L.c.node, &L.Ae[0][0], L.fe);  // this colour's cells share no node
@@ -426,8 +458,8 @@ class Fluid {
     using MatDG = Eigen::Matrix<double, Dim, G>;
     struct Factors {
       MatKG Nm, Nt, Wt, T, St;
-      std::array<MatKG, Dim> Dm, nD, Cm, Ct, Vt, Lt, Pt;
-      MatDG r, rp;
+      std::array<MatKG, Dim> Dm, nD, Cm, Ct, Vt, Lt, Pt, St_s;
+      MatDG r, rp, gp_old;  // gp_old: grad p^L
       std::array<MatDG, Dim> gv;  // (grad v^L)_i. at each g, i the row
       Eigen::Matrix<double, G, 1> gd, svs;
     };

@@ -510,6 +510,7 @@ class MpmFem final : public Formulation<Dim> {
       soil_.theta[i] = std::min(1.0, s.V / support_[i]);
       soil_.n[i] = std::clamp(1.0 - s.Vs / support_[i], kMinNodalPorosity, 1.0);
       soil_.k[i] = s.mk / m;
+      soil_.rho_p[i] = m / support_[i];
       solid_.vL[i] = solid_.acc[i].mv / m;
       soil_.vs[i] = solid_.vL[i];
     });
