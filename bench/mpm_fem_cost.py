@@ -30,7 +30,7 @@ import argparse, copy, datetime, json, os, platform, subprocess, sys, tempfile
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 STAGES = ["soil p2g", "fluid assembly", "fluid factorisation", "fluid solve", "phase field",
-          "soil grid update", "g2p + musl remap", "stress and porosity"]
+          "soil grid update", "g2p + musl remap", "stress and porosity"]  # mpm-fem's stages
 
 
 def load(example, name="scene.json"):
@@ -129,13 +129,16 @@ def main():
         per_n = r.get("loop_us_per_fluid_node_step", float("nan"))
         lines.append(f"| {case} | {form} | {np_} | {nodes} | {steps} | {r['dt']:.3g} | {r['loop_seconds']:.2f} | "
                      f"{per_p:.3g} | {per_n:.3g} | {fac:.3f} | {its:.2f} | {whole / 60:.1f} min |")
+    stages = list(STAGES)  # mpm-fem's, then any other formulation's in order of appearance
+    for _, _, r in rows:
+        stages += [k for k in r.get("stage_seconds", {}) if k not in stages]
     lines += ["", "Stages, per cent of the time loop (and microseconds per fluid node-step):", "",
-              "| case | formulation | " + " | ".join(STAGES) + " |", "|---|---|" + "---|" * len(STAGES)]
+              "| case | formulation | " + " | ".join(stages) + " |", "|---|---|" + "---|" * len(stages)]
     for case, form, r in rows:
         st = r.get("stage_seconds", {})
         nodes = r.get("fluid_nodes", 0)
         cells = []
-        for s in STAGES:
+        for s in stages:
             if s not in st:
                 cells.append("")
                 continue
