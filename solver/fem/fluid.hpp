@@ -260,6 +260,7 @@ class Fluid {
       //   St   w s_a n               SUPG on n grad p         Pt_i w (tau / rho) d_i N_a (PSPG)
       //   nD_i n d_i N_b
       auto& M = L.m;
+      bool soil_cell = false;  // a Gauss point with kappa_s > 0: the skeleton's response is assembled
       FluidPoint<Dim> f;
       for (int gp = 0; gp < G; ++gp) {
         fields_at(L.c, gp, soil, f);
@@ -286,6 +287,7 @@ class Fluid {
         // The skeleton's response to this step's pressure change (see soil_response):
         // kappa_s = dt (1 - n)^2 / ((1 - n) rho_s + dt c)  [m^3 s / kg].
         const double kappa_s = soil_response && f.rho_p > 0.0 ? dt * (1.0 - f.n) * (1.0 - f.n) / (f.rho_p + dt * cd) : 0.0;
+        soil_cell = soil_cell || kappa_s > 0.0;
         // The residual's explicit part r = n rho (v^L/dt - 1/2 vbar.grad v^L + b) - P^(L); with
         // the drag implicit, P^ = c (v^{L+1} - v_s^L) (c at L): c v_s^L here, c N_b on the left.
         const Vec<Dim> r = W * (f.v / dt - 0.5 * f.grad_v * f.vbar + b) - (implicit_drag ? Vec<Dim>(-cd * f.vs) : Vec<Dim>(cd * rel));
@@ -325,7 +327,7 @@ class Fluid {
         // tau_c rho d_i N_a (1/2 div(n v^L) + div((1 - n) v_s)); the continuity's
         // -N_a div((1 - n) v_s) + pi_a . r_pspg
         Vec<Dim> grad_p_old = Vec<Dim>::Zero();
-        if (soil_response)
+        if (kappa_s > 0.0)
           for (int k = 0; k < K; ++k) grad_p_old += p[L.c.node[k]] * L.c.dN[gp][k];
         for (int d = 0; d < Dim; ++d) {
           M.gp_old(d, gp) = grad_p_old[d];
@@ -346,7 +348,7 @@ class Fluid {
       typename Local::MatKK pp = Local::MatKK::Zero();
       for (int d = 0; d < Dim; ++d) {
         pp.noalias() += M.Pt[d].lazyProduct(M.nD[d].transpose());
-        if (soil_response) pp.noalias() += M.St_s[d].lazyProduct(M.Dm[d].transpose());
+        if (soil_cell) pp.noalias() += M.St_s[d].lazyProduct(M.Dm[d].transpose());
       }
       for (int i = 0; i < Dim; ++i) {
         for (int j = 0; j < Dim; ++j) {
@@ -367,7 +369,7 @@ class Fluid {
         Eigen::Matrix<double, K, 1> fp = -M.Nt * M.svs;
         for (int d = 0; d < Dim; ++d) {
           fp += M.Pt[d] * M.rp.row(d).transpose();
-          if (soil_response) fp += M.St_s[d] * M.gp_old.row(d).transpose();
+          if (soil_cell) fp += M.St_s[d] * M.gp_old.row(d).transpose();
         }
         for (int k = 0; k < K; ++k) L.fe[k * B + Dim] = fp[k];
       }
