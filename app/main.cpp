@@ -13,6 +13,7 @@
 
 #include "postprocess/postprocess.hpp"
 #include "preprocess/preprocess.hpp"
+#include "scene/budget.hpp"
 #include "scene/files.hpp"
 #include "scene/scene.hpp"
 #include "solver/element.hpp"
@@ -276,7 +277,14 @@ int main(int argc, char** argv) {
   pre->add_option("scene", scene_path, "Scene file (JSON)")->required();
   pre->add_option("-o,--output", out_dir, "Run directory (default runs/<scene name>)");
   swmpm::pre::PreprocessOptions pre_opt;
-  auto run_dir_flags = [&pre_opt](CLI::App* sub) {
+  std::string max_memory;
+  auto memory_flag = [&max_memory](CLI::App* sub) {
+    sub->add_option("--max-memory", max_memory,
+                    "Refuse a scene whose run would need more memory than this (8G, 512M, 2e9 bytes; default: the "
+                    "machine's memory)");
+  };
+  auto run_dir_flags = [&pre_opt, &memory_flag](CLI::App* sub) {
+    memory_flag(sub);
     sub->add_flag("--overwrite", pre_opt.overwrite,
                   "Replace an earlier run in the run directory (only the files swmpm wrote there are removed)");
     sub->add_flag("--trust-geometry", pre_opt.trust_geometry,
@@ -290,6 +298,7 @@ int main(int argc, char** argv) {
   solve->add_option("--threads", threads, "OpenMP threads (default: all cores); results do not depend on it")
       ->check(CLI::NonNegativeNumber);
   bool resume = false;
+  memory_flag(solve);
   solve->add_flag("--resume", resume,
                   "Continue from the last checkpoint (RUN_DIR/checkpoint.bin), bit for bit as if the run had not "
                   "stopped");
@@ -327,17 +336,25 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     pre_opt.quiet = quiet;
+    if (!max_memory.empty()) {
+      try {
+        pre_opt.max_memory = swmpm::scene::parse_memory_size(max_memory);
+      } catch (const std::invalid_argument& e) {
+        std::cerr << "swmpm: --max-memory: " << e.what() << "\n";
+        return 2;
+      }
+    }
     if (*pre) {
       swmpm::pre::preprocess(scene_path, out_dir, pre_opt);
       return 0;
     }
     if (*solve) {
-      return swmpm::solve(run_dir, {threads, quiet, resume});
+      return swmpm::solve(run_dir, {threads, quiet, resume, pre_opt.max_memory});
     }
     if (*post) return postprocess_command(run_dir, post_args, quiet);
     if (*run) {
       const std::string dir = swmpm::pre::preprocess(scene_path, out_dir, pre_opt);
-      const int rc = swmpm::solve(dir, {threads, quiet});
+      const int rc = swmpm::solve(dir, {threads, quiet, false, pre_opt.max_memory});
       if (rc != 0) return rc;
       return postprocess_command(dir, {}, quiet);
     }

@@ -12,6 +12,7 @@
 
 #include "preprocess/initial_state.hpp"
 #include "preprocess/shape.hpp"
+#include "scene/budget.hpp"
 #include "scene/expression.hpp"
 #include "scene/files.hpp"
 #include "scene/formulations.hpp"
@@ -22,6 +23,68 @@ namespace swmpm::pre {
 
 std::vector<SeedPoint> seed_points(const scene::Scene& s) { return seed_points(s, make_shapes(s)); }
 
+namespace {
+
+/// The lattice of a body's seeding: its bounding box's cells [c_lo, c_hi] (clamped to the grid),
+/// n points per cell and axis, spacing dx.
+struct Lattice {
+  std::array<int, 3> c_lo{0, 0, 0}, c_hi{0, 0, 0};
+  std::array<int, 3> count{1, 1, 1};  // lattice points per axis
+  double dx = 0.0;
+  double points() const { return double(count[0]) * double(count[1]) * double(count[2]); }
+};
+
+/// `cells` per axis fit an int: the parser refuses more than scene::kMaxCellsPerAxis.
+Lattice lattice_of(const scene::Scene& s, const Shape& shape, int n, const std::array<int, 3>& cells) {
+  const double h = s.grid.cell_size;
+  Lattice l;
+  l.dx = h / n;
+  const auto box = shape.bounds();
+  for (int a = 0; a < s.dimension; ++a) {
+    l.c_lo[a] = static_cast<int>(std::clamp(std::floor((box[0][a] - s.grid.min[a]) / h), 0.0, cells[a] - 1.0));
+    l.c_hi[a] = static_cast<int>(std::clamp(std::ceil((box[1][a] - s.grid.min[a]) / h) - 1.0, 0.0, cells[a] - 1.0));
+    // Whole cells of n points; the scan refuses more than scene's kMaxScanned points in all, so
+    // a count that would overflow an int never reaches the loops.
+    l.count[a] = static_cast<int>(std::min<double>((l.c_hi[a] - l.c_lo[a] + 1.0) * n, 1 << 30));
+  }
+  return l;
+}
+
+std::array<int, 3> grid_cells(const scene::Scene& s) {
+  std::array<int, 3> cells{1, 1, 1};
+  for (int a = 0; a < s.dimension; ++a)
+    cells[a] = std::max(1, static_cast<int>(std::ceil((s.grid.max[a] - s.grid.min[a]) / s.grid.cell_size - 1e-9)));
+  return cells;
+}
+
+/// Particles each body would seed, estimated before seeding: its lattice's points times the share
+/// of 4,096 stratified samples of its bounding box that fall inside the geometry.
+std::vector<scene::BodyCount> body_counts(const scene::Scene& s, const std::vector<std::unique_ptr<Shape>>& shapes) {
+  const auto cells = grid_cells(s);
+  std::vector<scene::BodyCount> out;
+  for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+    const Lattice l = lattice_of(s, *shapes[b], s.bodies[b].particles_per_cell, cells);
+    const int m = s.dimension == 3 ? 16 : 64;  // samples per axis
+    std::array<int, 3> per{1, 1, 1};
+    for (int a = 0; a < s.dimension; ++a) per[a] = std::min(m, l.count[a]);
+    double inside = 0.0;
+    for (int k = 0; k < per[2]; ++k)
+      for (int j = 0; j < per[1]; ++j)
+        for (int i = 0; i < per[0]; ++i) {
+          const std::array<int, 3> ijk{i, j, k};
+          Point x{0.0, 0.0, 0.0};
+          for (int a = 0; a < s.dimension; ++a)
+            x[a] = s.grid.min[a] + l.c_lo[a] * s.grid.cell_size + (ijk[a] + 0.5) / per[a] * l.count[a] * l.dx;
+          if (shapes[b]->inside(x)) inside += 1.0;
+        }
+    const double share = inside / (double(per[0]) * per[1] * per[2]);
+    out.push_back({share * l.points(), l.points()});
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<SeedPoint> seed_points(const scene::Scene& s, const std::vector<std::unique_ptr<Shape>>& shapes) {
   const int dim = s.dimension;
   const double h = s.grid.cell_size;
@@ -29,25 +92,16 @@ std::vector<SeedPoint> seed_points(const scene::Scene& s, const std::vector<std:
   using Seeded = SeedPoint;
   // Named surfaces get face bits 6..
   const std::vector<std::string> surface_bits = scene::surface_bit_names(s);
-
-  std::array<int, 3> cells{1, 1, 1};
-  for (int a = 0; a < dim; ++a)
-    cells[a] = std::max(1, static_cast<int>(std::ceil((s.grid.max[a] - s.grid.min[a]) / h - 1e-9)));
+  const std::array<int, 3> cells = grid_cells(s);
 
   std::vector<Seeded> seeded;
   for (std::size_t b = 0; b < s.bodies.size(); ++b) {
     const auto& body = s.bodies[b];  // every body: solid, saturated or free water
     const int n = body.particles_per_cell;
-    const double dx = h / n;  // lattice spacing
-    const auto box = shapes[b]->bounds();
-    std::array<int, 3> c_lo{0, 0, 0}, c_hi{0, 0, 0};
-    for (int a = 0; a < dim; ++a) {
-      c_lo[a] = std::clamp(static_cast<int>(std::floor((box[0][a] - s.grid.min[a]) / h)), 0, cells[a] - 1);
-      c_hi[a] = std::clamp(static_cast<int>(std::ceil((box[1][a] - s.grid.min[a]) / h)) - 1, 0, cells[a] - 1);
-    }
-    const int nz = dim == 3 ? (c_hi[2] - c_lo[2] + 1) * n : 1;
-    const int ny = (c_hi[1] - c_lo[1] + 1) * n;
-    const int nx = (c_hi[0] - c_lo[0] + 1) * n;
+    const Lattice l = lattice_of(s, *shapes[b], n, cells);
+    const double dx = l.dx;  // lattice spacing
+    const auto& c_lo = l.c_lo;
+    const int nx = l.count[0], ny = l.count[1], nz = l.count[2];
     auto lattice = [&](int a, int k) { return s.grid.min[a] + c_lo[a] * h + (k + 0.5) * dx; };
     auto inside_grid = [&](const Point& x) {
       for (int a = 0; a < dim; ++a)
@@ -248,7 +302,11 @@ Phases seed_phases(const scene::Scene& s) {
   // Free water stays in the points even where it is not written as particles (mpm-fem): it still
   // loads the soil below it, takes its place where bodies overlap, and makes the phase field.
   // Built and checked once (files read, named surfaces present).
+  // Resources first: the grid before any geometry is meshed, the particles before they are seeded.
+  const scene::MemoryLimit limit = scene::memory_limit(s.max_memory);
+  scene::check_memory(s, s.source_file, {}, limit);
   const std::vector<std::unique_ptr<Shape>> shapes = make_shapes(s);
+  scene::check_memory(s, s.source_file, body_counts(s, shapes), limit);
   const std::vector<SeedPoint> points = seed_points(s, shapes);
   const InitialFields init = initial_state(s, points, content);
 
@@ -342,6 +400,7 @@ std::string preprocess(const std::string& scene_path, const std::string& out_dir
 std::string preprocess(const std::string& scene_path, const std::string& out_dir, const PreprocessOptions& options) {
   scene::Scene s = scene::load_scene(scene_path);
   s.trust_geometry = options.trust_geometry;
+  s.max_memory = options.max_memory;
   const bool quiet = options.quiet;
   reject_unused_switches(scene_path, s);
   // Everything is built in memory first, so a failure writes nothing.

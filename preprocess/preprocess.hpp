@@ -80,6 +80,7 @@ struct PreprocessOptions {
   bool quiet = false;
   bool overwrite = false;       // --overwrite: replace an earlier run in the folder (swmpm's files only)
   bool trust_geometry = false;  // --trust-geometry: mesh .geo scripts without reading them first
+  double max_memory = 0.0;      // B, --max-memory: refuse a scene that needs more (0: the machine's memory)
 };
 
 /// Runs the whole stage. Nothing is written unless everything succeeds. Returns the run directory

@@ -65,12 +65,13 @@ class GeometryError : public std::runtime_error {
 struct GeoAccess {
   std::string scene_dir;
   bool trust_scripts = false;
+  double lattice_spacing = 0.0;  // m, the body's particle spacing: a .geo is meshed no finer than 1/8 of it
 };
 
 /// Builds the shape of a body's geometry (throws GeometryError). File paths in `g` are absolute
 /// (the parser resolved them); `scene_dir` is the scene file's folder.
 std::unique_ptr<Shape> make_shape(const scene::Geometry& g, int dimension, const std::string& scene_dir,
-                                  bool trust_scripts = false);
+                                  bool trust_scripts = false, double lattice_spacing = 0.0);
 
 /// Every body's shape, checked against the scene where only the files can tell: bounds from a
 /// file inside the grid, named surfaces that loads and boundaries refer to present. Throws

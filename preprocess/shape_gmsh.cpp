@@ -11,6 +11,7 @@
 #include <fstream>
 #include <mutex>
 #include <regex>
+#include <sstream>
 
 #include "preprocess/geo_script.hpp"
 #include "preprocess/shape_types.hpp"
@@ -67,6 +68,82 @@ class GmshSession {
   std::lock_guard<std::mutex> lock_;
   std::size_t seen_ = 0;
 };
+
+/// What a .msh file declares before its data: gmsh reserves memory for the counts of its $Nodes
+/// and $Elements headers, so a 79-byte file that declares 1e8 nodes once cost 2.4 GB. A count the
+/// file's bytes cannot hold (every node and element takes at least 4 bytes, ASCII or binary), or
+/// node tags far sparser than the nodes (tags index arrays), is refused before gmsh reads it.
+/// Returns "" or why. MSH 2 and 4, ASCII and binary.
+std::string msh_header_problem(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  const double bytes = static_cast<double>(fs::file_size(file));
+  std::string line;
+  bool binary = false, v4 = true;
+  double nodes = 0.0, elements = 0.0, max_node_tag = 0.0, max_element_tag = 0.0;
+  // Reads the counts that follow a section header: MSH 4 "blocks count min_tag max_tag" (binary:
+  // four size_t), MSH 2 "count".
+  auto counts = [&](double& count, double& max_tag) {
+    if (v4 && binary) {
+      std::uint64_t c[4] = {0, 0, 0, 0};
+      in.read(reinterpret_cast<char*>(c), sizeof c);
+      count = static_cast<double>(c[1]);
+      max_tag = static_cast<double>(c[3]);
+    } else if (std::getline(in, line)) {
+      std::istringstream is(line);
+      double blocks = 0.0, min_tag = 0.0;
+      if (v4) is >> blocks >> count >> min_tag >> max_tag;
+      else {
+        is >> count;
+        max_tag = count;
+      }
+    }
+  };
+  int sections = 0;
+  while (sections < 2 && std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line == "$MeshFormat" && std::getline(in, line)) {
+      std::istringstream is(line);
+      double version = 0.0;
+      int type = 0;
+      is >> version >> type;
+      v4 = version >= 4.0;
+      binary = type == 1;
+      if (binary) std::getline(in, line);  // the endianness check, one int and a newline
+    } else if (line == "$Nodes") {
+      counts(nodes, max_node_tag);
+      ++sections;
+    } else if (line == "$Elements") {
+      counts(elements, max_element_tag);
+      ++sections;
+    }
+  }
+  if (4.0 * (nodes + elements) > bytes)
+    return "declares " + std::to_string(static_cast<long long>(std::min(nodes, 9e18))) + " nodes and " +
+           std::to_string(static_cast<long long>(std::min(elements, 9e18))) + " elements in " +
+           std::to_string(static_cast<long long>(bytes)) +
+           " bytes (each takes at least 4): a truncated or corrupt mesh file";
+  if (max_node_tag > 64.0 * nodes + 1e6 || max_element_tag > 64.0 * elements + 1e6)
+    return "declares node or element tags up to " + std::to_string(static_cast<long long>(std::min(
+               std::max(max_node_tag, max_element_tag), 9e18))) +
+           " for " + std::to_string(static_cast<long long>(nodes)) + " nodes and " +
+           std::to_string(static_cast<long long>(elements)) +
+           " elements: tags that sparse would be indexed densely; renumber the mesh (gmsh -renumber)";
+  return "";
+}
+
+/// The smallest element size a .geo is meshed with: an eighth of the body's particle spacing (the
+/// inside test needs no finer: a chord of a boundary of radius R then strays by (dx/8)^2 / 8R), and
+/// no finer than what keeps the mesh under kMaxGeoElements in the model's bounding box. A script's
+/// size of 1e-5 m on a 1 m body once meshed without end.
+constexpr double kMaxGeoElements = 4e6;
+double mesh_size_floor(int dim, double lattice_spacing) {
+  double x0 = 0, y0 = 0, z0 = 0, x1 = 0, y1 = 0, z1 = 0;
+  gmsh::model::getBoundingBox(-1, -1, x0, y0, z0, x1, y1, z1);
+  const double extent[3] = {x1 - x0, y1 - y0, z1 - z0};
+  double measure = 1.0;
+  for (int a = 0; a < dim; ++a) measure *= std::max(extent[a], 0.0);
+  return std::max(lattice_spacing / 8.0, std::pow(measure / kMaxGeoElements, 1.0 / dim));
+}
 
 std::string join(const std::vector<std::string>& v) {
   std::string out;
@@ -223,6 +300,8 @@ class GmshShape final : public SurfacedShape {
     std::error_code ec;
     if (!fs::is_regular_file(file_, ec)) fail("no such file");
     const bool geo = fs::path(file_).extension() == ".geo" || fs::path(file_).extension() == ".GEO";
+    if (!geo)
+      if (const std::string why = msh_header_problem(file_); !why.empty()) fail(why);
     // A .geo is a program: read it before gmsh runs it (preprocess/geo_script.hpp).
     if (geo && !access.trust_scripts)
       check_geo_script(file_, {{fs::path(access.scene_dir), fs::path(file_).parent_path()}});
@@ -230,6 +309,10 @@ class GmshShape final : public SurfacedShape {
     open(g, geo, session);
     check_dimension(dim);
     if (geo) {
+      const double floor = mesh_size_floor(dim, access.lattice_spacing);
+      double set_min = 0.0;
+      gmsh::option::getNumber("Mesh.MeshSizeMin", set_min);
+      gmsh::option::setNumber("Mesh.MeshSizeMin", std::max(set_min, floor));
       gmsh::model::mesh::generate(dim);
       if (const std::string e = session.first_error(); !e.empty()) fail("gmsh could not mesh it: " + e);
     }

@@ -10,7 +10,11 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/boost/graph/helpers.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <string>
 
 #include "preprocess/shape_types.hpp"
 
@@ -21,11 +25,55 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Mesh = CGAL::Surface_mesh<K::Point_3>;
 
+/// What a surface file declares before its data: CGAL reserves memory for an OFF header's counts
+/// and reads a binary STL's triangle count, so a small file that declares 1e9 vertices cost
+/// gigabytes. A count the file's bytes cannot hold is refused before CGAL reads it. Returns "" or
+/// why.
+std::string surface_header_problem(const std::string& file) {
+  const double bytes = static_cast<double>(std::filesystem::file_size(file));
+  std::ifstream in(file, std::ios::binary);
+  std::string ext = std::filesystem::path(file).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  auto declares = [&](double items, const std::string& what, double each) {
+    return "declares " + std::to_string(static_cast<long long>(std::min(items, 9e18))) + " " + what + " in " +
+           std::to_string(static_cast<long long>(bytes)) + " bytes (each takes at least " +
+           std::to_string(static_cast<int>(each)) + "): a truncated or corrupt surface file";
+  };
+  if (ext == ".off") {
+    // "OFF" (possibly with the counts on the same line), comments, then "vertices faces edges".
+    std::string token;
+    in >> token;  // OFF, COFF, NOFF, STOFF, ...: anything else is CGAL's to refuse
+    if (token.size() < 3 || token.compare(token.size() - 3, 3, "OFF") != 0) return "";
+    double counts[2] = {0.0, 0.0};
+    for (double& c : counts) {
+      while (in >> token && token[0] == '#') std::getline(in, token);
+      try {
+        c = std::stod(token);
+      } catch (const std::exception&) {
+        return "";  // not a count: CGAL reports the format error
+      }
+    }
+    // A vertex is at least "0 0 0\n" (6 bytes) or 12 binary bytes; a face at least "3 0 1 2\n".
+    if (6.0 * counts[0] + 8.0 * counts[1] > bytes)
+      return declares(counts[0] + counts[1], "vertices and faces", 6.0);
+  } else if (ext == ".stl") {
+    char head[5] = {0, 0, 0, 0, 0};
+    in.read(head, 5);
+    if (std::string(head, 5) == "solid") return "";  // ASCII: read as it comes
+    in.seekg(80);
+    std::uint32_t triangles = 0;
+    in.read(reinterpret_cast<char*>(&triangles), sizeof triangles);
+    if (84.0 + 50.0 * triangles > bytes) return declares(triangles, "triangles", 50.0);
+  }
+  return "";
+}
+
 class SurfaceMeshShape final : public Shape {
  public:
   explicit SurfaceMeshShape(const std::string& file) : file_(file) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(file_, ec)) fail("no such file");
+    if (const std::string why = surface_header_problem(file_); !why.empty()) fail(why);
     // read_polygon_mesh merges duplicated vertices (STL stores each triangle's own corners) and
     // orients the faces consistently before building the mesh.
     if (!CGAL::IO::read_polygon_mesh(file_, mesh_) || mesh_.is_empty())

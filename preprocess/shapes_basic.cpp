@@ -113,12 +113,12 @@ std::unique_ptr<Shape> make_polygon(const Polyline2& vertices,
 }
 
 std::unique_ptr<Shape> make_shape(const scene::Geometry& g, int dimension, const std::string& scene_dir,
-                                  bool trust_scripts) {
+                                  bool trust_scripts, double lattice_spacing) {
   if (g.type == "box") return make_box(g.min, g.max, dimension);
   if (g.type == "polygon") return make_polygon(g.vertices);
   if (g.type == "slope") return make_slope(g);
   if (g.type == "footing") return make_footing(g, dimension);
-  if (g.type == "gmsh") return make_gmsh(g, dimension, {scene_dir, trust_scripts});
+  if (g.type == "gmsh") return make_gmsh(g, dimension, {scene_dir, trust_scripts, lattice_spacing});
   if (g.type == "surface-mesh") return make_surface_mesh(g);
   throw GeometryError("type", "got \"" + g.type + "\", expected a geometry type (box, polygon, slope, footing, gmsh, "
                               "surface-mesh)");
@@ -137,7 +137,8 @@ std::vector<std::unique_ptr<Shape>> make_shapes(const scene::Scene& s) {
     const scene::Geometry& g = s.bodies[b].geometry;
     const std::string path = "/bodies/" + std::to_string(b) + "/geometry";
     try {
-      shapes.push_back(make_shape(g, dim, scene_dir, s.trust_geometry));
+      shapes.push_back(make_shape(g, dim, scene_dir, s.trust_geometry,
+                                  s.grid.cell_size / s.bodies[b].particles_per_cell));
     } catch (const GeometryError& e) {
       problem(path + "/" + e.key(), e.what());
       shapes.push_back(nullptr);

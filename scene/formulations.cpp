@@ -73,7 +73,8 @@ std::vector<FormulationRow> make_rows() {
                   .switches = {},
                   .check = nullptr,
                   .material_keys = {"bulk_modulus"},  // a fluid material in a dry scene is unused, as written
-                  .keys = phase_materials});
+                  .keys = phase_materials,
+                  .cost = {.bytes_per_point = 800.0, .bytes_per_node = 60.0, .node_bytes_3d = 1.5, .us_per_point_step = 0.15, .us_per_node_step = 0.002}});
   rows.push_back({.id = Formulation::explicit_single_point,
                   .name = "explicit-single-point",
                   .paper = "seed 000",
@@ -88,7 +89,8 @@ std::vector<FormulationRow> make_rows() {
                                {"/solver/continuity", kContinuity, "non-conservative"}},
                   .check = nullptr,
                   .material_keys = {"bulk_modulus"},
-                  .keys = phase_materials});
+                  .keys = phase_materials,
+                  .cost = {.bytes_per_point = 1000.0, .bytes_per_node = 100.0, .node_bytes_3d = 1.5, .us_per_point_step = 0.35, .us_per_node_step = 0.002}});
   // Semi-implicit: the node-wise projection with a linear basis (seed 001's eq. 77 is its
   // constant-basis case, which biases free-surface nodes: 3.4 % pressure error and 1e-3 m/s of
   // spurious flow in a hydrostatic layer at rest, where the linear one is exact; docs/verification.md).
@@ -104,7 +106,8 @@ std::vector<FormulationRow> make_rows() {
                   .switches = semi_implicit,
                   .check = check_semi_implicit,
                   .material_keys = {"bulk_modulus"},
-                  .keys = phase_materials});
+                  .keys = phase_materials,
+                  .cost = {.bytes_per_point = 900.0, .bytes_per_node = 150.0, .node_bytes_3d = 3.0, .us_per_point_step = 1.2, .us_per_node_step = 0.01}});
   std::vector<Switch> double_point = semi_implicit;
   double_point.push_back({"/solver/escaped_water", {"keep", "remove"}, "keep"});
   double_point.push_back({"/initialisation/tie_water", {"true", "false"}, "true"});
@@ -117,7 +120,8 @@ std::vector<FormulationRow> make_rows() {
                   .switches = double_point,
                   .check = check_semi_implicit,
                   .material_keys = {"bulk_modulus"},
-                  .keys = phase_materials});
+                  .keys = phase_materials,
+                  .cost = {.bytes_per_point = 700.0, .bytes_per_node = 150.0, .node_bytes_3d = 3.0, .us_per_point_step = 1.2, .us_per_node_step = 0.01}});
   rows.push_back({.id = Formulation::explicit_double_point,
                   .name = "explicit-double-point",
                   .paper = "seed 003",
@@ -129,7 +133,8 @@ std::vector<FormulationRow> make_rows() {
                                {"/solver/stabilisation/pressure", {"none", "mfvp-constant", "mfvp-linear"}, "mfvp-linear"}},
                   .check = nullptr,
                   .material_keys = {"bulk_modulus", "grain_diameter", "ergun_a", "ergun_b", "maximum_porosity", "cavitation_threshold"},
-                  .keys = phase_materials});
+                  .keys = phase_materials,
+                  .cost = {.bytes_per_point = 700.0, .bytes_per_node = 100.0, .node_bytes_3d = 1.5, .us_per_point_step = 0.8, .us_per_node_step = 0.002}});
   rows.push_back({.id = Formulation::mpm_fem,
                   .name = "mpm-fem",
                   .paper = "seed 004",
@@ -146,7 +151,8 @@ std::vector<FormulationRow> make_rows() {
                   .check = check_mpm_fem,
                   .material_keys = {"grain_diameter", "ergun_a", "ergun_b"},
                   // The air and the phase field of the grid's fluid.
-                  .keys = {"/solver/air", "/solver/phase_field", "/initialisation/materials"}});
+                  .keys = {"/solver/air", "/solver/phase_field", "/initialisation/materials"},
+                  .cost = {.bytes_per_point = 900.0, .bytes_per_node = 1500.0, .node_bytes_3d = 5.0, .us_per_point_step = 1.0, .us_per_node_step = 15.0}});
   return rows;
 }
 

@@ -34,6 +34,17 @@ struct Problem {
   std::string path, message;
 };
 
+/// What a run of a formulation costs, for the estimates made before it starts (scene/budget.hpp):
+/// lower bounds of its memory (peak RSS less the program's, bench/ and docs/verification.md,
+/// "Resource estimates") and its speed on the 2-core bench machine, one thread.
+struct Cost {
+  double bytes_per_point = 600.0;    // B per particle or water point
+  double bytes_per_node = 60.0;      // B per node of the whole grid in 2D (the grid's fields)
+  double node_bytes_3d = 1.0;        // x bytes_per_node in 3D (a node has more neighbours)
+  double us_per_point_step = 0.15;   // µs per particle (or water point) and step
+  double us_per_node_step = 0.002;   // µs per node of the whole grid and step
+};
+
 struct FormulationRow {
   Formulation id;
   std::string name;
@@ -51,6 +62,7 @@ struct FormulationRow {
   /// one its formulation does not list is refused, naming who reads it; to_json writes them for
   /// the formulations that list them only.
   std::vector<std::string> keys = {};
+  Cost cost = {};
   bool reads(const std::string& path) const;
 
   /// This formulation's entry for a switch path, or nullptr when it does not read it.

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "scene/budget.hpp"
 #include "scene/formulations.hpp"
 #include "scene/keys.hpp"
 #include "scene/parser.hpp"
@@ -144,6 +145,20 @@ void SceneParser::parse_grid(const json& j, const std::string& path) {
   grid_min_ = grid.min;
   grid_max_ = grid.max;
   if (!g.ok("cell_size")) return;
+  // The solver indexes nodes with 32-bit integers per axis: a count past kMaxCellsPerAxis is refused
+  // here (a grid max of 1e12 m once wrapped around to a wrong count, reported only at solve).
+  for (int d = 0; d < dim(); ++d) {
+    const auto i = static_cast<std::size_t>(d);
+    const double cells = (grid.max[i] - grid.min[i]) / grid.cell_size;
+    if (!(cells <= kMaxCellsPerAxis)) {
+      const bool tiny_cells = grid.cell_size < 1e-6;  // the likelier culprit
+      c_.error(tiny_cells ? g.at("cell_size") : g.at("max"),
+               "the grid would have " + fmt_g(cells) + " cells along axis " + std::to_string(d) + " ((max - min) / " +
+                   "cell_size = " + fmt_g(grid.max[i] - grid.min[i]) + " m / " + fmt_g(grid.cell_size) +
+                   " m); expected at most " + fmt_g(kMaxCellsPerAxis) + " per axis");
+      return;
+    }
+  }
   // An extent that is not a whole number of cells is rounded up: the grid grows past `max` to the
   // next cell boundary (documented in docs/scene-format.md).
   for (int d = 0; d < dim(); ++d) {

@@ -248,6 +248,7 @@ struct Scene {
   Initialisation initialisation;
   std::string source_file;  // path of the scene file (for relative paths and messages)
   bool trust_geometry = false;  // --trust-geometry: mesh .geo scripts unchecked (not a scene key)
+  double max_memory = 0.0;      // B, --max-memory (0: the machine's memory; not a scene key)
 
   const Material& material(const std::string& name) const;
   int material_index(const std::string& name) const;

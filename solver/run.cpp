@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scene/budget.hpp"
 #include "scene/files.hpp"
 #include "scene/formulations.hpp"
 #include "scene/pointcloud.hpp"
@@ -353,8 +354,13 @@ class Runner {
                                  "run swmpm preprocess again");
       state_.surfaces = surface_samples_from_cloud<Dim>(scene::read_vtu(surfaces.string()), surfaces.string());
     }
+    // The grid's and the points' memory before the formulation allocates its grid.
+    scene::check_run_memory(scene_, (dir_ / "scene.json").string(),
+                            static_cast<double>(state_.solid.size() + state_.fluid.size()),
+                            scene::memory_limit(opt_.max_memory));
     f_ = factory_ ? factory_(scene_, state_) : make_formulation<Dim>(scene_, state_);
     refuse_intervals_below_the_step();
+    if (!opt_.resume) estimate_cost();
     reporters_ = make_materials<Dim>(scene_);  // frames' material state fields (pure functions of the particles)
     compression_ = scene::vtu_compression(scene_.output.compression);
     threads_ = omp_get_max_threads();
@@ -397,6 +403,20 @@ class Runner {
     check("/output/monitor_interval", scene_.output.monitor_interval, "a row every step");
     if (scene_.output.checkpoint_interval) check("/output/checkpoint_interval", *scene_.output.checkpoint_interval, "");
     if (!problems.empty()) throw scene::SceneError(problems);
+  }
+
+  /// Steps, frames, bytes and wall time of a fresh run from its first step: past a hard limit (a
+  /// year of wall time, more output than the disk's free space) refused before anything is written
+  /// (exit 2); past a soft one a warning in the log (scene/budget.hpp).
+  void estimate_cost() {
+    std::string reason;
+    const double dt = scene_.time.dt ? *scene_.time.dt : scene_.time.cfl * f_->critical_time_step(state_, reason);
+    estimate_ = scene::estimate_run(scene_, static_cast<double>(state_.solid.size() + state_.fluid.size()), dt,
+                                    clock_.t_start);
+    std::error_code ec;
+    const auto space = fs::space(dir_, ec);
+    estimate_warnings_ = scene::check_run_estimate(scene_, (dir_ / "scene.json").string(), estimate_, dt, reason,
+                                                   ec ? 0.0 : static_cast<double>(space.available));
   }
 
   /// The run directory: an earlier solve's files give way (only those swmpm wrote), a file of a
@@ -449,6 +469,11 @@ class Runner {
     } else {
       log_.line("dt " + fmt(*scene_.time.dt) + " s (critical " + fmt(dt_crit) + " s by " + dt_reason_ + ")");
       if (*scene_.time.dt > dt_crit) log_.line("warning: dt exceeds the critical time step; the run may diverge");
+    }
+    if (!resume_) log_.line(estimate_.summary);
+    for (const auto& w : estimate_warnings_) {
+      log_.line(w);
+      if (opt_.quiet) std::cerr << w << "\n";  // a warning is shown even when the terminal is quiet
     }
   }
 
@@ -939,6 +964,8 @@ class Runner {
   SolveOptions opt_;
   FormulationFactory<Dim> factory_;  // empty: the scene's formulation
   Log log_;
+  scene::RunEstimate estimate_;                // a fresh run's cost, from its first step
+  std::vector<std::string> estimate_warnings_;  // soft limits passed
   scene::Scene scene_;
   std::string scene_text_;  // RUN_DIR/scene.json as read at the start
   State<Dim> state_;

@@ -25,6 +25,7 @@ struct SolveOptions {
   int threads = 0;     // 0: all cores
   bool quiet = false;  // no terminal output (log.txt is still written)
   bool resume = false;  // continue from RUN_DIR/checkpoint.bin (--resume)
+  double max_memory = 0.0;  // B, --max-memory: refuse a run that needs more (0: the machine's memory)
 };
 
 /// Runs the formulation of RUN_DIR/scene.json on RUN_DIR/particles/*.vtu and writes output/,

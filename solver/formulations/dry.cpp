@@ -9,6 +9,7 @@
 //   (6) MUSL: remap momentum with the new v_p, v_i = (mv)_i / m_i, BCs   (fused with (5): one pass)
 //   (7) L_p = sum v_i (x) grad N_ip; F, V; then F-bar when solver.stabilisation.fbar is set (transfer/fbar.hpp)
 //   (8) stress update per material
+#include <sstream>
 #include <omp.h>
 
 #include <limits>
@@ -105,7 +106,9 @@ class Dry final : public Formulation<Dim> {
     const long n = static_cast<long>(ps.size());
 #pragma omp parallel for reduction(max : v_max) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) v_max = std::max(v_max, ps.v[p].norm());
-    reason = "P-wave CFL (c = " + std::to_string(c_max) + " m/s, |v|max = " + std::to_string(v_max) + " m/s)";
+    std::ostringstream os;
+    os << "P-wave CFL (c = " << c_max << " m/s, |v|max = " << v_max << " m/s)";
+    reason = os.str();
     return grid_.h() / (c_max + v_max);
   }
 

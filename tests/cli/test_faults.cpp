@@ -343,17 +343,19 @@ TEST(FullDisk, FileSizeLimitStopsTheRunWithStatusFailed) {
 }
 
 TEST(FullDisk, FullFilesystemStopsTheRunAndPreprocessWritesNothing) {
-  // A 400 KiB tmpfs in a private mount namespace (root only; skipped elsewhere).
+  // A 5 MiB tmpfs in a private mount namespace (root only; skipped elsewhere): more than twice the
+  // run's estimated output (2.3 MB, a lower bound; a disk that cannot hold it is refused up front,
+  // ResourceLimits.*), less than the 7 MB it writes.
   const fs::path dir = swmpm::testing::scratch("faults-enospc");
   write(dir / "scene.json", frame_every_step().dump(2));
   const fs::path mnt = dir / "disk", kept = dir / "kept";
   fs::create_directories(mnt);
   const std::string script =
-      "set -e; mount -t tmpfs -o size=400k tmpfs " + mnt.string() + "; cd " + dir.string() + "; " +
+      "set -e; mount -t tmpfs -o size=5m tmpfs " + mnt.string() + "; cd " + dir.string() + "; " +
       std::string(SWMPM_EXE) + " preprocess scene.json -o " + (mnt / "run").string() + " -q; set +e; " +
       SWMPM_EXE + " solve " + (mnt / "run").string() + " -q 2> err.txt; echo $? > status.txt; " +
       // preprocess into the full disk: exit 5, and nothing left behind
-      "head -c 1000000 /dev/zero > " + (mnt / "filler").string() + " 2>/dev/null; " + SWMPM_EXE +
+      "head -c 10000000 /dev/zero > " + (mnt / "filler").string() + " 2>/dev/null; " + SWMPM_EXE +
       " preprocess scene.json -o " + (mnt / "second").string() + " -q 2> err2.txt; echo $? > status2.txt; " +
       "ls -A " + mnt.string() + " > listing.txt; rm " + (mnt / "filler").string() + "; cp -a " +
       (mnt / "run").string() + " " + kept.string();
