@@ -15,6 +15,7 @@
 #include "preprocess/preprocess.hpp"
 #include "scene/budget.hpp"
 #include "scene/files.hpp"
+#include "scene/input.hpp"
 #include "scene/scene.hpp"
 #include "solver/element.hpp"
 #include "solver/output/checkpoint.hpp"
@@ -180,6 +181,9 @@ int postprocess_command(const std::string& run_dir, const PostArgs& a, bool quie
       const std::string path = post::write_report(run_dir, refs);
       if (!quiet) std::cout << "report: " << path << "\n";
     }
+  } catch (const swmpm::scene::InputError& e) {  // a file refused: not regular, too large, bad JSON
+    std::cerr << "swmpm postprocess " << cmd << ": " << e.what() << "\n";
+    return 2;
   } catch (const std::exception& e) {
     std::cerr << "swmpm postprocess " << cmd << ": " << e.what() << "\n";
     return 1;

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "postprocess/postprocess.hpp"
+#include "scene/input.hpp"
 
 namespace fs = std::filesystem;
 
@@ -39,11 +40,8 @@ int vector_component(const std::string& s) {
 
 /// The scene's dimension from RUN_DIR/scene.json; 0 when it cannot be read.
 int scene_dimension(const fs::path& run_dir) {
-  std::ifstream in(run_dir / "scene.json");
-  if (!in) return 0;
   try {
-    const auto j = nlohmann::json::parse(in);
-    return j.value("dimension", 0);
+    return scene::read_json_file((run_dir / "scene.json").string(), "scene file").value("dimension", 0);
   } catch (const std::exception&) {
     return 0;
   }

@@ -18,6 +18,7 @@
 
 #include "postprocess/format.hpp"
 #include "scene/files.hpp"
+#include "scene/input.hpp"
 #include "postprocess/postprocess.hpp"
 
 namespace fs = std::filesystem;
@@ -114,10 +115,8 @@ double nice_step(double range, double count) {
 /// The run's dimension (2 or 3) from RUN_DIR/run.json or scene.json; 2 when neither says.
 int run_dimension(const fs::path& dir) {
   for (const char* name : {"run.json", "scene.json"}) {
-    std::ifstream in(dir / name);
-    if (!in) continue;
     try {
-      const int d = nlohmann::json::parse(in).value("dimension", 0);
+      const int d = scene::read_json_file((dir / name).string(), "JSON file").value("dimension", 0);
       if (d == 2 || d == 3) return d;
     } catch (const std::exception&) {
     }

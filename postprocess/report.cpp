@@ -13,6 +13,7 @@
 #include "postprocess/format.hpp"
 #include "postprocess/postprocess.hpp"
 #include "scene/files.hpp"
+#include "scene/input.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -22,13 +23,9 @@ namespace swmpm::post {
 namespace {
 
 json load(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": missing (is this a run directory written by swmpm?)");
-  try {
-    return json::parse(in);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(path.string() + ": not valid JSON (" + e.what() + ")");
-  }
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw std::runtime_error(path.string() + ": missing (is this a run directory written by swmpm?)");
+  return scene::read_json_file(path.string(), "JSON file");
 }
 
 /// A string for a Markdown table cell: '|' would end the cell.

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "postprocess/postprocess.hpp"
+#include "scene/input.hpp"
 
 namespace swmpm::post {
 
@@ -70,11 +71,11 @@ bool Table::has(const std::string& name) const {
 
 namespace {
 
-/// Calls fn(cells, line_no) for every line of the CSV file that is not empty or a # comment.
+/// Calls fn(cells, line_no) for every line of the CSV file that is not empty or a # comment. Only
+/// a regular file of at most scene::kMaxInputBytes is read (a FIFO blocked, /dev/zero grew memory).
 template <class Fn>
 void for_each_csv_line(const std::string& path, const std::string& what, Fn&& fn) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open " + what);
+  std::istringstream in(scene::read_input_file(path, what));
   std::string line;
   std::size_t line_no = 0;
   while (std::getline(in, line)) {
@@ -97,7 +98,7 @@ std::vector<double> parse_row(const std::vector<std::string>& cells, const std::
 
 Table read_csv(const std::string& path) {
   Table t;
-  for_each_csv_line(path, "file", [&](const std::vector<std::string>& cells, std::size_t line_no) {
+  for_each_csv_line(path, "CSV file", [&](const std::vector<std::string>& cells, std::size_t line_no) {
     if (t.names.empty()) {
       for (const auto& c : cells) t.names.push_back(trim(c));
       t.columns.resize(t.names.size());

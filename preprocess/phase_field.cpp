@@ -89,7 +89,7 @@ InitialPhaseField phase_field(const scene::Scene& s, const std::vector<SeedPoint
     const auto& body = s.bodies[static_cast<std::size_t>(points[p].body)];
     if (!body.fluid.empty())
       for (int a = 0; a < Dim; ++a)
-        v[a] = scene::evaluate_expression(body.initial.velocity[static_cast<std::size_t>(a)], points[p].x[0], points[p].x[1], points[p].x[2]);
+        v[a] = scene::initial_velocity(s, static_cast<std::size_t>(points[p].body), static_cast<std::size_t>(a), points[p].x);
     const double side = points[p].spacing, w = std::pow(side, Dim) / std::pow(kGauss, Dim);  // m, m^Dim
     for (int q = 0; q < (kGimp ? 1 : 1 << Dim); ++q) {  // the Gauss points, bit a: the side along axis a
       Vec<Dim> x, l;

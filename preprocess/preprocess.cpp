@@ -14,6 +14,7 @@
 #include "preprocess/shape.hpp"
 #include "scene/budget.hpp"
 #include "scene/expression.hpp"
+#include "scene/input.hpp"
 #include "scene/files.hpp"
 #include "scene/formulations.hpp"
 
@@ -196,7 +197,7 @@ scene::PointCloud particle_cloud(const scene::Scene& s, const std::vector<SeedPo
     mass.values[k] = density_of(content_of(content, sp)) * V;
     for (int a = 0; a < dim; ++a) {
       half.values[3 * k + a] = 0.5 * sp.spacing;
-      vel.values[3 * k + a] = scene::evaluate_expression(body.initial.velocity[a], sp.x[0], sp.x[1], sp.x[2]);
+      vel.values[3 * k + a] = scene::initial_velocity(s, static_cast<std::size_t>(sp.body), static_cast<std::size_t>(a), sp.x);
     }
     material.values[k] = material_of(body);
     body_arr.values[k] = sp.body;
@@ -347,9 +348,13 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
       reject("/solver/kinematics: got \"" + s.solver.kinematics + "\", but material \"" + s.materials[k].name +
              "\" is " + scene::to_string(model) + ", a finite-strain model; expected \"finite-strain\"");
   }
-  std::ifstream in(scene_path);
-  const auto raw = nlohmann::json::parse(in, nullptr, false);
-  if (raw.is_discarded() || !raw.contains("solver")) return;
+  nlohmann::json raw;
+  try {
+    raw = scene::read_json_file(scene_path, "scene file");
+  } catch (const scene::InputError&) {
+    return;
+  }
+  if (!raw.is_object() || !raw.contains("solver")) return;
   const auto& solver = raw["solver"];
   const auto stab = solver.contains("stabilisation") && solver["stabilisation"].is_object() ? solver["stabilisation"]
                                                                                                : nlohmann::json::object();
@@ -371,8 +376,7 @@ void prepare_run_directory(files::RunDirectory& run, bool overwrite) {
     if (!overwrite) {
       std::string status;
       try {
-        std::ifstream in(run / "run.json");
-        status = nlohmann::json::parse(in).value("status", "");
+        status = scene::read_json_file((run / "run.json").string(), "run.json").value("status", "");
       } catch (const std::exception&) {
       }
       throw files::RunDirectoryError(

@@ -1,6 +1,7 @@
 // Scene file parsing (json -> Scene): SceneParser (parser.hpp) for the top level, grid, materials,
 // boundaries, loads, time, output, solver, initialisation and formulation (the bodies are in
-// parse_bodies.cpp); load_scene, which reads a scene file and reports keys written twice.
+// parse_bodies.cpp); load_scene, which reads a scene file (scene/input.hpp: bounded size and
+// nesting) and reports keys written twice.
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -15,6 +16,7 @@
 
 #include "scene/budget.hpp"
 #include "scene/formulations.hpp"
+#include "scene/input.hpp"
 #include "scene/keys.hpp"
 #include "scene/parser.hpp"
 
@@ -42,6 +44,7 @@ Scene SceneParser::parse() {
   if (top.ok("boundaries")) parse_boundaries(top.get("boundaries"), top.at("boundaries"));
   if (top.ok("loads")) parse_loads(top.get("loads"), top.at("loads"));
   if (top.ok("time")) parse_time(top.get("time"), top.at("time"));
+  check_expression_values();
   parse_output(top.ok("output") ? top.get("output") : json::object(), top.at("output"));
   parse_solver(top.ok("solver") ? top.get("solver") : json::object(), top.at("solver"));
   if (top.ok("formulation")) resolve_formulation(top.str("formulation"), top.at("formulation"));
@@ -409,6 +412,68 @@ void SceneParser::parse_loads(const json& arr, const std::string& path) {
   }
 }
 
+// -- expressions ---------------------------------------------------------------------------------
+
+// An expression that is inf or NaN (1/0, exp(1e6), sqrt(-1)) passed the syntax check and made the
+// run diverge at its first step, blamed on "J <= 0". Each is evaluated here where it will be used:
+// an initial velocity at the corners and the centre of its body's bounds (the grid's when the
+// bounds are known only after meshing), a load function at nine times from 0 to time.end. The
+// solver and preprocess check every value again where they use it.
+namespace {
+
+std::string value_text(double v) { return std::isnan(v) ? "nan" : v > 0 ? "inf" : "-inf"; }
+
+}  // namespace
+
+void SceneParser::check_expression_values() {
+  const int d = dim();
+  for (std::size_t i = 0; i < s_.bodies.size(); ++i) {
+    const std::optional<Bounds> known = i < body_bounds_.size() ? body_bounds_[i] : std::nullopt;
+    const Bounds box = known ? *known : Bounds{grid_min_, grid_max_};
+    std::vector<Vec3> points;
+    for (int corner = 0; corner < (1 << d); ++corner) {
+      Vec3 x{0.0, 0.0, 0.0};
+      for (int a = 0; a < d; ++a) {
+        const auto k = static_cast<std::size_t>(a);
+        x[k] = (corner >> a) & 1 ? box.max[k] : box.min[k];
+      }
+      points.push_back(x);
+    }
+    Vec3 centre{0.0, 0.0, 0.0};
+    for (std::size_t k = 0; k < 3; ++k) centre[k] = 0.5 * (box.min[k] + box.max[k]);
+    points.push_back(centre);
+    for (std::size_t a = 0; a < s_.bodies[i].initial.velocity.size(); ++a) {
+      const std::string& expr = s_.bodies[i].initial.velocity[a];  // a number is an expression too
+      for (const Vec3& x : points) {
+        const double v = expression_value(expr, {"x", "y", "z"}, x);
+        if (std::isfinite(v)) continue;
+        const std::string at = fmt_vec(x, d);  // "[x, y]"
+        const std::string where = (known ? "its bounds " : "the grid ") + fmt_vec(box.min, d) + ".." + fmt_vec(box.max, d);
+        c_.error(body_paths_[i] + "/initial/velocity/" + std::to_string(a),
+                 "got " + in_quotes(expr) + ", which is " + value_text(v) + " at " + (d == 2 ? "(x, y)" : "(x, y, z)") +
+                     " = (" + at.substr(1, at.size() - 2) + ") m; expected an expression with a finite value over " +
+                     "the body (evaluated at the corners and the centre of " + where + " m) [m/s]");
+        break;
+      }
+    }
+  }
+  const double end = s_.time.end > 0.0 ? s_.time.end : 0.0;
+  for (std::size_t i = 0; i < s_.loads.size(); ++i) {
+    const std::string& expr = s_.loads[i].function.expression;
+    if (expr.empty()) continue;
+    for (int k = 0; k <= 8; ++k) {
+      const double t = end * k / 8.0;
+      const double v = expression_value(expr, {"t"}, {t, 0.0, 0.0});
+      if (std::isfinite(v)) continue;
+      c_.error("/loads/" + std::to_string(i) + "/function",
+               "got " + in_quotes(expr) + ", which is " + value_text(v) + " at t = " + fmt_g(t) +
+                   " s; expected an expression with a finite value over the run (evaluated at 9 times from 0 to " +
+                   fmt_g(end) + " s)");
+      break;
+    }
+  }
+}
+
 // -- time, output, solver -------------------------------------------------------------------------
 
 void SceneParser::parse_time(const json& j, const std::string& path) {
@@ -719,55 +784,6 @@ namespace swmpm::scene {
 
 using namespace detail;
 
-namespace {
-
-/// Finds keys written twice in one object while the text is parsed (a JSON value keeps only the
-/// last, which would silently drop the first). Tracks the JSON pointer of the current position.
-struct DuplicateKeys {
-  std::string label;
-  std::vector<std::string> lines;
-  struct Frame {
-    bool array = false;
-    std::string key;          // object: the current key
-    std::size_t index = 0;    // array: the index of the current element
-    std::set<std::string> keys;
-  };
-  std::vector<Frame> frames;
-
-  std::string pointer() const {
-    std::string p;
-    for (const Frame& f : frames) p += "/" + (f.array ? std::to_string(f.index) : escape(f.key));
-    return p;
-  }
-  void element_done() {
-    if (!frames.empty() && frames.back().array) ++frames.back().index;
-  }
-  void on_event(json::parse_event_t event, const json& parsed) {
-    using E = json::parse_event_t;
-    switch (event) {
-      case E::object_start: frames.push_back({false, "", 0, {}}); break;
-      case E::array_start: frames.push_back({true, "", 0, {}}); break;
-      case E::key: {
-        Frame& f = frames.back();
-        f.key = parsed.get<std::string>();
-        if (!f.keys.insert(f.key).second) {
-          lines.push_back(label + ": " + pointer() + ": got key " + in_quotes(f.key) +
-                          " twice in one object, expected each key once");
-        }
-        break;
-      }
-      case E::object_end:
-      case E::array_end:
-        frames.pop_back();
-        element_done();
-        break;
-      case E::value: element_done(); break;
-    }
-  }
-};
-
-}  // namespace
-
 Scene parse_scene(const nlohmann::json& j, const std::string& label) {
   return SceneParser(j, label).parse();
 }
@@ -776,43 +792,20 @@ Scene load_scene(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw SceneError({path + ": is a directory, expected a scene file (JSON)"});
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw SceneError({path + ": cannot read the scene file (" + std::strerror(errno) + ")"});
-  }
-  std::ostringstream buf;
-  buf << in.rdbuf();
-  if (in.bad()) throw SceneError({path + ": cannot read the scene file"});
-  const std::string text = buf.str();
   json j;
-  DuplicateKeys duplicates;
-  duplicates.label = path;
+  std::vector<std::string> duplicates;
   try {
-    j = json::parse(text, [&duplicates](int, json::parse_event_t event, json& parsed) {
-      duplicates.on_event(event, parsed);
-      return true;
-    });
-  } catch (const json::parse_error& e) {
-    // Line and column of the byte where parsing failed (e.byte is 1-based).
-    const std::size_t byte = e.byte == 0 ? 0 : e.byte - 1;
-    std::size_t line = 1, column = 1;
-    for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
-      if (text[i] == '\n') ++line, column = 1;
-      else ++column;
-    }
-    std::string why = e.what();
-    const auto at = why.find(": ", why.find("parse error"));
-    if (at != std::string::npos) why = why.substr(at + 2);
-    throw SceneError({path + ": invalid JSON at line " + std::to_string(line) + ", column " +
-                      std::to_string(column) + " (byte " + std::to_string(e.byte) + "): " + why});
+    j = parse_json(read_input_file(path, "scene file"), path, &duplicates);
+  } catch (const InputError& e) {
+    throw SceneError({e.what()});
   }
   try {
     Scene scene = parse_scene(j, path);
-    if (!duplicates.lines.empty()) throw SceneError(duplicates.lines);
+    if (!duplicates.empty()) throw SceneError(duplicates);
     return scene;
   } catch (const SceneError& e) {
-    if (duplicates.lines.empty()) throw;
-    std::vector<std::string> lines = duplicates.lines;
+    if (duplicates.empty()) throw;
+    std::vector<std::string> lines = duplicates;
     for (const auto& l : e.lines()) {
       if (!contains(lines, l)) lines.push_back(l);
     }

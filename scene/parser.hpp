@@ -101,6 +101,8 @@ class SceneParser {
   void parse_initialisation(const json& j, const std::string& path, const Obj& top);
   void parse_phase_materials(const json& j, const std::string& path);
   void resolve_formulation(const std::string& name, const std::string& path);
+  // -- expressions: finite values at representative points (parse.cpp) ---------------------------
+  void check_expression_values();
 };
 
 }  // namespace swmpm::scene::detail

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "scene/files.hpp"
+#include "scene/input.hpp"
 
 #include <vtkCellArray.h>
 #include <vtkDoubleArray.h>
@@ -163,10 +164,9 @@ void write_lattice_vtu(const std::string& path, const PointCloud& cloud, const s
 }
 
 PointCloud read_vtu(const std::string& path) {
-  {
-    std::ifstream probe(path);
-    if (!probe) throw std::runtime_error(path + ": cannot open file");
-  }
+  // VTK would block on a FIFO and read a device without end: a regular file only. Frames of large
+  // runs are big, so the bound is generous.
+  check_input_file(path, "VTU file", std::uintmax_t{64} << 30);
   auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
   reader->SetFileName(path.c_str());
   reader->Update();
@@ -205,11 +205,7 @@ void write_pvd(const std::string& path, const std::vector<PvdEntry>& entries) {
 }
 
 std::vector<PvdEntry> read_pvd(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
+  const std::string text = read_input_file(path, "PVD file");
   static const std::regex dataset(R"(<DataSet\s+([^>]*)/>)");
   static const std::regex attr(R"((\w+)\s*=\s*"([^"]*)\")");
   std::vector<PvdEntry> entries;

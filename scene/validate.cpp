@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <numbers>
 
+#include "scene/input.hpp"
 #include "scene/validate.hpp"
 
 namespace swmpm::scene::detail {
@@ -34,12 +35,20 @@ std::string fmt_g(double x) {
 }
 
 std::string shown(const json& v) {
+  // A long string keeps its first 60 characters and says how long it was (a 1 MB value must not
+  // make a 1 MB message).
+  if (v.is_string() && v.get_ref<const std::string&>().size() > 60) {
+    const std::string cut = shortened(v.get_ref<const std::string&>(), 60);
+    const auto mark = cut.rfind("… (");
+    std::string s = json(cut.substr(0, mark)).dump(-1, ' ', false, json::error_handler_t::replace);
+    return s.insert(s.size() - 1, cut.substr(mark));  // "abc… (N characters)"
+  }
   std::string s = v.dump(-1, ' ', false, json::error_handler_t::replace);
   if (s.size() > 60) s = s.substr(0, 57) + "...";
   return s;
 }
 
-std::string in_quotes(const std::string& s) { return "\"" + s + "\""; }
+std::string in_quotes(const std::string& s) { return "\"" + shortened(s) + "\""; }
 
 std::string fmt_vec(const Vec3& v, int dim) {
   std::string out = "[";
@@ -57,6 +66,20 @@ std::string escape(const std::string& key) {
   return out;
 }
 
+std::string shown_pointer(const std::string& pointer) {
+  if (pointer.size() <= 60) return pointer;
+  std::string out;
+  std::size_t begin = 0;
+  while (begin < pointer.size()) {
+    const std::size_t slash = pointer.find('/', begin + 1);
+    const std::size_t end = slash == std::string::npos ? pointer.size() : slash;
+    out += '/';
+    out += shortened(pointer.substr(begin + 1, end - begin - 1));
+    begin = end;
+  }
+  return out;
+}
+
 std::string item(const std::string& path, std::size_t i) { return path + "/" + std::to_string(i); }
 
 std::string lower(std::string s) {
@@ -66,33 +89,44 @@ std::string lower(std::string s) {
 
 namespace {
 
+/// Longest names "did you mean" compares: declared keys and values are short; a longer string is
+/// no typo of one (and comparing a 1 MB value with each name took seconds and gigabytes).
+constexpr std::size_t kMaxSuggestLength = 64;
+
 /// Edit distance with adjacent transpositions (optimal string alignment): "snad" -> "sand" is 1.
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
-  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
-  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+/// Three rows of the table, O(min(|a|, |b|)) memory.
+std::size_t edit_distance(const std::string& a_in, const std::string& b_in) {
+  const std::string& a = a_in.size() >= b_in.size() ? a_in : b_in;
+  const std::string& b = a_in.size() >= b_in.size() ? b_in : a_in;  // the shorter one
+  std::vector<std::size_t> before(b.size() + 1), prev(b.size() + 1), row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
   for (std::size_t i = 1; i <= a.size(); ++i) {
+    row[0] = i;
     for (std::size_t j = 1; j <= b.size(); ++j) {
       const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
-      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
-        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-      }
+      row[j] = std::min({prev[j] + 1, row[j - 1] + 1, prev[j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) row[j] = std::min(row[j], before[j - 2] + 1);
     }
+    std::swap(before, prev);
+    std::swap(prev, row);
   }
-  return d[a.size()][b.size()];
+  return prev[b.size()];
 }
 
 /// The closest candidate to `s`, if close enough to be a plausible typo.
 std::optional<std::string> closest(const std::string& s, const std::vector<std::string>& candidates) {
+  // Up to one edit per three characters, at least one, at most three.
+  const std::size_t limit = std::clamp<std::size_t>(s.size() / 3, 1, 3);
+  if (s.size() > kMaxSuggestLength) return std::nullopt;
   std::optional<std::string> best;
   std::size_t best_d = std::numeric_limits<std::size_t>::max();
   for (const auto& c : candidates) {
+    // The distance is at least the difference of the lengths: skip what cannot be close.
+    if (c.size() > kMaxSuggestLength || (c.size() > s.size() ? c.size() - s.size() : s.size() - c.size()) > limit)
+      continue;
     const std::size_t d = edit_distance(lower(s), lower(c));
     if (d < best_d) best_d = d, best = c;
   }
-  // Up to one edit per three characters, at least one, at most three.
-  const std::size_t limit = std::clamp<std::size_t>(s.size() / 3, 1, 3);
   if (best && best_d <= limit) return best;
   return std::nullopt;
 }
@@ -186,6 +220,15 @@ std::string expression_problem(const std::string& expr, const std::vector<std::s
 }
 
 }  // namespace
+
+double expression_value(const std::string& expr, const std::vector<std::string>& vars, const Vec3& values) {
+  Vec3 v = values;
+  mu::Parser p;
+  for (std::size_t i = 0; i < vars.size() && i < v.size(); ++i) p.DefineVar(vars[i], &v[i]);
+  p.DefineConst("pi", std::numbers::pi);
+  p.SetExpr(expr);
+  return p.Eval();
+}
 
 // -- custom checks --------------------------------------------------------------------------------
 

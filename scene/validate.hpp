@@ -52,6 +52,8 @@ std::string escape(const std::string& key);
 std::string item(const std::string& path, std::size_t i);
 std::string lower(std::string s);
 std::string did_you_mean(const std::string& s, const std::vector<std::string>& candidates);
+/// A JSON pointer for a message: each reference token of more than 60 characters shortened.
+std::string shown_pointer(const std::string& pointer);
 
 // ------------------------------------------------------------------------------------------------
 // The schema.
@@ -64,7 +66,7 @@ struct Ctx {
   int dim = 0;
   std::vector<std::string> errors;
   void error(const std::string& path, const std::string& what) {
-    errors.push_back(label + ": " + (path.empty() ? std::string("(top level)") : path) + ": " + what);
+    errors.push_back(label + ": " + (path.empty() ? std::string("(top level)") : shown_pointer(path)) + ": " + what);
   }
 };
 
@@ -145,6 +147,9 @@ bool check_stress(Ctx& c, const json& v, const std::string& path, const Key& k);
 bool check_load_value(Ctx& c, const json& v, const std::string& path, const Key& k);
 bool check_velocity(Ctx& c, const json& v, const std::string& path, const Key& k);
 bool check_time_expression(Ctx& c, const json& v, const std::string& path, const Key& k);
+/// The value of an expression (valid: it passed check_velocity or check_time_expression) with
+/// the variables `vars` (up to three) set to `values`; inf or NaN when so it evaluates.
+double expression_value(const std::string& expr, const std::vector<std::string>& vars, const Vec3& values);
 bool check_time_table(Ctx& c, const json& v, const std::string& path, const Key& k);
 bool check_vertices(Ctx& c, const json& v, const std::string& path, const Key& k);
 /// A geometry file path as written, resolved against the folder of the scene file `label`.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -9,12 +10,16 @@
 
 #include <muParser.h>
 
+#include "scene/expression.hpp"
+#include "scene/input.hpp"
+
 namespace swmpm {
 
 struct TimeFunction::Impl {
   double ramp = 0.0;
   std::vector<std::array<double, 2>> table;
   std::unique_ptr<mu::Parser> parser;
+  std::string expression;
   mutable double t = 0.0;  // the parser's variable
 };
 
@@ -26,6 +31,7 @@ TimeFunction::TimeFunction(const scene::TimeFunction& tf) : impl_(std::make_uniq
     impl_->parser->DefineVar("t", &impl_->t);
     impl_->parser->DefineConst("pi", M_PI);
     impl_->parser->SetExpr(tf.expression);
+    impl_->expression = tf.expression;
   }
 }
 TimeFunction::~TimeFunction() = default;
@@ -37,6 +43,15 @@ double TimeFunction::operator()(double t) const {
   if (impl_->parser) {
     impl_->t = t;
     f = impl_->parser->Eval();
+    // The scene check evaluated it at nine times; a value that is not finite between them stops
+    // the run here, naming the expression, rather than as a divergence blamed on the material.
+    if (!std::isfinite(f)) {
+      char at[64];
+      std::snprintf(at, sizeof at, "%.10g", t);
+      throw scene::ExpressionValueError(impl_->expression, "got \"" + scene::shortened(impl_->expression) +
+                                                               "\", which is " + (std::isnan(f) ? "nan" : f > 0 ? "inf" : "-inf") +
+                                                               " at t = " + at + " s; expected a finite value");
+    }
   } else if (!impl_->table.empty()) {
     const auto& tab = impl_->table;
     if (t <= tab.front()[0]) f = tab.front()[1];

@@ -21,8 +21,10 @@
 #include <nlohmann/json.hpp>
 
 #include "scene/budget.hpp"
+#include "scene/expression.hpp"
 #include "scene/files.hpp"
 #include "scene/formulations.hpp"
+#include "scene/input.hpp"
 #include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 #include "solver/formulation.hpp"
@@ -283,12 +285,17 @@ class Runner {
         }
         const Clock::Step st = clock_.next(scene_, *f_, state_);
         const StepContext ctx{load_clock(state_.time), st.dt, gravity_at(state_.time)};
-        f_->step(state_, ctx);
-        if (!state_.health.ok()) {
-          fail(describe_failure(ctx));
+        try {
+          f_->step(state_, ctx);
+          if (!state_.health.ok()) {
+            fail(describe_failure(ctx));
+            break;
+          }
+          guard_.add_work(*f_, state_, {load_clock(state_.time + st.dt), st.dt, gravity_at(state_.time + st.dt)}, st.dt);
+        } catch (const scene::ExpressionValueError& e) {  // a load function's value is inf or NaN
+          fail(load_function_failure(e));
           break;
         }
-        guard_.add_work(*f_, state_, {load_clock(state_.time + st.dt), st.dt, gravity_at(state_.time + st.dt)}, st.dt);
         clock_.advance(state_, st);
         const Due due = due_after_step(end_initialisation_if_due());
         if (due.energy_check) {
@@ -715,7 +722,7 @@ class Runner {
     if (now != then) {
       std::string paths;
       try {
-        for (const auto& d : nlohmann::json::diff(nlohmann::json::parse(then), nlohmann::json::parse(now)))
+        for (const auto& d : nlohmann::json::diff(scene::parse_json(then, "checkpoint"), scene::parse_json(now, "scene.json")))
           paths += (paths.empty() ? "" : ", ") + d.value("path", std::string("?"));
       } catch (const std::exception&) {
         paths = "the file";
@@ -768,6 +775,18 @@ class Runner {
   void fail(std::string diagnosis) {
     status_ = "diverged";
     diagnosis_ = std::move(diagnosis);
+  }
+
+  /// "<scene.json>: /loads/<i>/function: got "...", which is inf at t = ... s; ..." for the load
+  /// whose expression it is.
+  std::string load_function_failure(const scene::ExpressionValueError& e) const {
+    std::string where = "/loads";
+    for (std::size_t i = 0; i < scene_.loads.size(); ++i)
+      if (scene_.loads[i].function.expression == e.expression()) {
+        where = "/loads/" + std::to_string(i) + "/function";
+        break;
+      }
+    return scene_.source_file + ": " + where + ": " + e.what();
   }
 
   /// The failed particle, before (the last good snapshot) and now, or the failed grid node. A

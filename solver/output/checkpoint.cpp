@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "scene/files.hpp"
+#include "scene/input.hpp"
 
 namespace swmpm {
 namespace {
@@ -85,9 +86,9 @@ Checkpoint Checkpoint::read(const std::filesystem::path& path) {
   in.read(text.data(), static_cast<std::streamsize>(length));
   if (!in) throw CheckpointError(path.string() + ": the header is cut short");
   try {
-    c.header = nlohmann::ordered_json::parse(text);
-  } catch (const std::exception& e) {
-    throw CheckpointError(path.string() + ": the header is not valid JSON (" + e.what() + ")");
+    c.header = scene::parse_ordered_json(text, path.string() + " (header)");  // bounded nesting
+  } catch (const scene::InputError& e) {
+    throw CheckpointError(std::string(e.what()) + "; the header is not valid JSON");
   }
   c.data_.assign(std::istreambuf_iterator<char>(in), {});
   for (const auto& a : c.header.at("arrays")) {

@@ -7,7 +7,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <fstream>
 #include <regex>
 #include <string>
 #include <thread>
@@ -405,4 +407,198 @@ TEST(Hangs, TinyIntervalsAboveTheStepStillEnd) {
   const Result r = swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + (dir / "run").string() + " -q", dir);
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(swmpm::testing::load_json((dir / "run" / "run.json").string())["status"], "completed");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parser robustness (issue 27, item 6): what a scene file or a postprocess input can hold that
+// crashed, hung or exhausted memory. Each is refused with exit 2, one line naming the file (and
+// the JSON path), in bounded time, and nothing is written.
+
+namespace {
+
+/// `swmpm ARGS` through the shell, killed after `limit` seconds (a hang must not hang the test);
+/// with the wall time it took.
+struct Timed {
+  Result r;
+  double seconds;
+};
+Timed swmpm_limited(const std::string& args, const fs::path& dir, int limit = 60) {
+  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
+  const std::string cmd = "timeout -s KILL " + std::to_string(limit) + " " + SWMPM_EXE + " " + args + " > " + out +
+                          " 2> " + err;
+  const auto start = std::chrono::steady_clock::now();
+  const int raw = std::system(cmd.c_str());
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return {{WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, read_text(out), read_text(err)}, seconds};
+}
+
+std::size_t line_count(const std::string& s) { return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n')); }
+
+/// The column scene as text, with `"solver": <value>` in place of its solver object.
+std::string column_with_solver(const std::string& value) {
+  json s = column_scene();
+  s.erase("solver");
+  std::string text = s.dump(2);
+  text.insert(1, "\n  \"solver\": " + value + ",");
+  return text;
+}
+
+}  // namespace
+
+// 65,000 levels of arrays or objects crashed with SIGSEGV; preprocess and solve (which reads the
+// run directory's scene.json) now stop at 64 levels.
+TEST(ParserRobustness, DeepNestingExitsTwoNamingTheFileAndThePath) {
+  const fs::path dir = swmpm::testing::scratch("parser-deep");
+  std::string objects;
+  for (int i = 0; i < 65000; ++i) objects += "{\"a\":";
+  objects += "1" + std::string(65000, '}');
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {std::string(65000, '[') + std::string(65000, ']'), "/solver/0/0/0/0"}, {objects, "/solver/a/a/a/a"}};
+  for (const auto& [deep, pointer] : cases) {
+    write(dir / "scene.json", column_with_solver(deep));
+    const Timed t = swmpm_limited("preprocess " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
+    EXPECT_EQ(t.r.status, 2) << t.r.err.substr(0, 500);
+    EXPECT_EQ(line_count(t.r.err), 1u) << t.r.err.substr(0, 500);
+    EXPECT_EQ(t.r.err.rfind((dir / "scene.json").string() + ": " + pointer, 0), 0u) << t.r.err.substr(0, 500);
+    EXPECT_NE(t.r.err.find(": got arrays and objects nested deeper than 64 levels, expected at most 64 (line 2, column "),
+              std::string::npos)
+        << t.r.err.substr(0, 500);
+    EXPECT_LT(t.seconds, 10.0);
+    EXPECT_FALSE(fs::exists(dir / "run")) << "nothing may be written";
+
+    // The same text as a run directory's scene.json: solve reads it before anything else.
+    fs::create_directories(dir / "made-up-run");
+    write(dir / "made-up-run" / "scene.json", column_with_solver(deep));
+    const Timed s = swmpm_limited("solve " + (dir / "made-up-run").string() + " -q", dir);
+    EXPECT_EQ(s.r.status, 2) << s.r.err.substr(0, 500);
+    EXPECT_EQ(s.r.err.rfind((dir / "made-up-run" / "scene.json").string() + ": " + pointer, 0), 0u)
+        << s.r.err.substr(0, 500);
+    EXPECT_FALSE(fs::exists(dir / "made-up-run" / "run.json"));
+  }
+}
+
+// 1e400 gave nlohmann's exception text with exit 1.
+TEST(ParserRobustness, NumberOutOfRangeExitsTwoNamingThePath) {
+  const fs::path dir = swmpm::testing::scratch("parser-1e400");
+  std::string text = column_scene().dump(2);
+  const std::size_t at = text.find("\"cell_size\": 0.05");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at + 13, 4, "1e400");
+  write(dir / "scene.json", text);
+  const Timed t = swmpm_limited("preprocess " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
+  EXPECT_EQ(t.r.status, 2) << t.r.err;
+  EXPECT_EQ(line_count(t.r.err), 1u) << t.r.err;
+  EXPECT_EQ(t.r.err.rfind((dir / "scene.json").string() +
+                              ": /grid/cell_size: got 1e400, which is out of the range of a double; expected a finite "
+                              "number (line ",
+                          0),
+            0u)
+      << t.r.err;
+  EXPECT_FALSE(fs::exists(dir / "run"));
+}
+
+// An unknown key and a bad choice of 1 MB each took seconds and gigabytes ("did you mean" on the
+// whole value) and echoed the megabyte back.
+TEST(ParserRobustness, MegabyteKeysAndValuesAreRefusedQuicklyAndShortly) {
+  const fs::path dir = swmpm::testing::scratch("parser-megabyte");
+  json s = column_scene();
+  s["grid"][std::string(1'000'000, 'k')] = 1;
+  s["grid"]["shape_function"] = std::string(1'000'000, 'g');
+  write(dir / "scene.json", s.dump());
+  const Timed t = swmpm_limited("preprocess " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
+  EXPECT_EQ(t.r.status, 2) << t.r.err.substr(0, 500);
+  EXPECT_EQ(line_count(t.r.err), 2u) << t.r.err.substr(0, 500);
+  EXPECT_LT(t.r.err.size(), 1000u) << "the values are shortened in the messages";
+  EXPECT_NE(t.r.err.find("/grid/shape_function: got \"" + std::string(60, 'g') + "… (1000000 characters)\", expected one of: "),
+            std::string::npos)
+      << t.r.err.substr(0, 500);
+  EXPECT_NE(t.r.err.find(": unknown key \"" + std::string(60, 'k') + "… (1000000 characters)\""), std::string::npos)
+      << t.r.err.substr(0, 500);
+  EXPECT_LT(t.seconds, 1.0) << "the whole preprocess, reading 2 MB of scene";
+  EXPECT_FALSE(fs::exists(dir / "run"));
+}
+
+// An initial velocity that is NaN at some particles, but finite at the corners and the centre of
+// the body that the scene check samples: preprocess stops at the first particle, naming it.
+TEST(ParserRobustness, NonFiniteVelocityAtAParticleStopsPreprocess) {
+  const fs::path dir = swmpm::testing::scratch("parser-velocity");
+  json s = column_scene();
+  const std::string expr = "abs(x - 0.0375) < 0.001 ? sqrt(-1) : 0";
+  s["bodies"][0]["initial"] = {{"velocity", {expr, 0}}};
+  write(dir / "scene.json", s.dump(2));
+  const Timed t = swmpm_limited("preprocess " + (dir / "scene.json").string() + " -o " + (dir / "run").string(), dir);
+  EXPECT_EQ(t.r.status, 2) << t.r.err;
+  EXPECT_EQ(line_count(t.r.err), 1u) << t.r.err;
+  EXPECT_EQ(t.r.err.rfind((dir / "scene.json").string() + ": /bodies/0/initial/velocity/0: got \"" + expr +
+                              "\", which is nan at (x, y) = (0.0375, ",
+                          0),
+            0u)
+      << t.r.err;
+  EXPECT_NE(t.r.err.find("expected a finite velocity [m/s]"), std::string::npos) << t.r.err;
+  EXPECT_FALSE(fs::exists(dir / "run"));
+}
+
+// A load function that is infinite between the times the scene check samples: the run stops at
+// the step that meets it, naming the load and the expression (it diverged with "J <= 0").
+TEST(ParserRobustness, NonFiniteLoadFunctionStopsTheRunNamingIt) {
+  const fs::path dir = swmpm::testing::scratch("parser-load");
+  json s = column_scene();
+  s["time"]["end"] = 0.1;
+  const std::string expr = "abs(t - 0.03) < 0.002 ? 1/0 : 1";
+  s["loads"] = {{{"type", "traction"}, {"body", "column"}, {"face", "y_max"}, {"value", {0.0, -1000.0}}, {"function", expr}}};
+  write(dir / "scene.json", s.dump(2));
+  const fs::path run = dir / "run";
+  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run.string() + " -q", dir).status, 0)
+      << "finite at t = 0, 0.0125, ..., 0.1 s";
+  const Timed t = swmpm_limited("solve " + run.string() + " -q --threads 1", dir);
+  EXPECT_EQ(t.r.status, 3) << t.r.err;
+  const json rj = swmpm::testing::load_json((run / "run.json").string());
+  EXPECT_EQ(rj["status"], "diverged");
+  const std::string diagnosis = rj.value("diagnosis", "");
+  EXPECT_EQ(diagnosis.rfind((run / "scene.json").string() + ": /loads/0/function: got \"" + expr + "\", which is inf at t = ", 0), 0u)
+      << diagnosis;
+  EXPECT_NE(diagnosis.find(" s; expected a finite value"), std::string::npos) << diagnosis;
+  EXPECT_GT(rj["end_time"].get<double>(), 0.026);
+  EXPECT_LT(rj["end_time"].get<double>(), 0.032);
+}
+
+// compare --reference FIFO blocked forever; a symbolic link to /dev/zero grew memory to 2.2 GB.
+// Every file postprocess reads is a regular file (links resolved) of at most 256 MiB.
+TEST(ParserRobustness, PostprocessReadsOnlyRegularFilesOfBoundedSize) {
+  const fs::path dir = swmpm::testing::scratch("parser-postprocess");
+  write(dir / "scene.json", short_column().dump(2));
+  const fs::path run = dir / "run";
+  ASSERT_EQ(swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + run.string() + " -q", dir).status, 0);
+  ASSERT_EQ(::mkfifo((dir / "fifo.csv").c_str(), 0600), 0);
+  fs::create_symlink("/dev/zero", dir / "zero.csv");
+  { std::ofstream(dir / "huge.csv") << "t,v\n"; }
+  fs::resize_file(dir / "huge.csv", 300u << 20);  // sparse: takes no disk space
+
+  const std::string limit = "(a regular file of at most 256 MiB)";
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"fifo.csv", "got a FIFO (named pipe), expected a reference file " + limit},
+      {"zero.csv", "got a character device, expected a reference file " + limit},
+      {"huge.csv", "got 300 MiB (314572800 bytes), expected a reference file " + limit}};
+  for (const auto& [name, why] : cases) {
+    const std::string file = (dir / name).string();
+    for (const std::string& command :
+         {"compare --monitor top.displacement_y --reference " + file, "plot --reference top.displacement_y=" + file}) {
+      const Timed t = swmpm_limited("postprocess " + run.string() + " " + command, dir, 20);
+      EXPECT_EQ(t.r.status, 2) << command << ": " << t.r.err;
+      EXPECT_EQ(line_count(t.r.err), 1u) << t.r.err;
+      EXPECT_NE(t.r.err.find(file + ": " + why), std::string::npos) << command << ": " << t.r.err;
+      EXPECT_LT(t.seconds, 5.0) << command;
+    }
+  }
+  // A file of the run directory itself, e.g. monitors.csv made a link to /dev/zero.
+  fs::rename(run / "monitors.csv", dir / "monitors.csv");
+  fs::create_symlink("/dev/zero", run / "monitors.csv");
+  const Timed t = swmpm_limited("postprocess " + run.string() + " compare --monitor top.displacement_y --reference " +
+                                    (dir / "huge.csv").string(),
+                                dir, 20);
+  fs::remove(run / "monitors.csv");
+  fs::rename(dir / "monitors.csv", run / "monitors.csv");
+  EXPECT_EQ(t.r.status, 2) << t.r.err;
+  EXPECT_NE(t.r.err.find((run / "monitors.csv").string() + ": got a character device, expected a CSV file"), std::string::npos)
+      << t.r.err;
 }

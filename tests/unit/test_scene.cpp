@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -16,6 +17,7 @@
 #include <cmath>
 #include <limits>
 
+#include "scene/input.hpp"
 #include "scene/scene.hpp"
 #include "support/mpm_fem_scene.hpp"
 #include "support/pond_scene.hpp"
@@ -347,6 +349,157 @@ TEST(SceneFile, DuplicateKeysAreReportedWithTheirPath) {
                                "expected each key once");
     EXPECT_NE(lines[1].find(": /bodies/0/solid: got \"c\""), std::string::npos) << lines[1];
   }
+}
+
+// ---- parser robustness (issue 27, item 6) -----------------------------------------------------
+
+namespace {
+
+/// The lines of the SceneError load_scene throws for `text` written to `name` (none: no error).
+std::vector<std::string> load_errors(const std::string& name, const std::string& text, std::string* path = nullptr) {
+  const std::string file = write_temp(name, text);
+  if (path) *path = file;
+  try {
+    load_scene(file);
+  } catch (const SceneError& e) {
+    return e.lines();
+  }
+  return {};
+}
+
+/// "line L, column C" of byte `at` of `text` (1-based line and column).
+std::string line_column(const std::string& text, std::size_t at) {
+  const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<long>(at), '\n'));
+  const std::size_t start = text.rfind('\n', at == 0 ? 0 : at - 1);
+  const std::size_t column = start == std::string::npos || at == 0 ? at + 1 : at - start;
+  return "line " + std::to_string(line) + ", column " + std::to_string(column);
+}
+
+}  // namespace
+
+// 65,000 levels of arrays or objects at a known key crashed with SIGSEGV (recursion on the value
+// while the message was built). Nesting is limited to 64 levels while the text is read.
+TEST(SceneFile, DeepNestingIsRefusedWithTheFileAndThePath) {
+  const std::string arrays = std::string(65000, '[') + std::string(65000, ']');
+  std::string objects;
+  for (int i = 0; i < 65000; ++i) objects += "{\"a\": ";
+  objects += "1" + std::string(65000, '}');
+  for (const auto& [deep, pointer] : {std::pair{arrays, std::string("/solver/0/0/0")}, std::pair{objects, std::string("/solver/a/a/a")}}) {
+    std::string text = scene_2d().dump(2);
+    text.insert(1, "\"solver\": " + deep + ",");
+    std::string path;
+    const auto lines = load_errors("swmpm_deep.json", text, &path);
+    ASSERT_EQ(lines.size(), 1u) << dump_lines(lines);
+    EXPECT_EQ(lines[0].rfind(path + ": " + pointer, 0), 0u) << lines[0].substr(0, 300);
+    EXPECT_NE(lines[0].find(": got arrays and objects nested deeper than 64 levels, expected at most 64 (line 1, column "),
+              std::string::npos) << lines[0].substr(0, 300);
+    EXPECT_LT(lines[0].size(), 600u);
+  }
+  // The limit itself: 64 levels are read, 65 are not.
+  EXPECT_NO_THROW(parse_json(std::string(64, '[') + std::string(64, ']'), "x.json"));
+  EXPECT_THROW(parse_json(std::string(65, '[') + std::string(65, ']'), "x.json"), InputError);
+}
+
+// 1e400 gave nlohmann's raw exception text; now the file, the JSON path, the line and the column.
+TEST(SceneFile, NumberOutOfRangeNamesThePath) {
+  std::string text = scene_2d().dump(2);
+  const std::size_t key = text.find("\"cell_size\": 0.05");
+  ASSERT_NE(key, std::string::npos);
+  const std::size_t at = key + 13;
+  text.replace(at, 4, "1e400");
+  std::string path;
+  auto lines = load_errors("swmpm_1e400.json", text, &path);
+  ASSERT_EQ(lines.size(), 1u) << dump_lines(lines);
+  EXPECT_EQ(lines[0], path + ": /grid/cell_size: got 1e400, which is out of the range of a double; expected a finite "
+                             "number (" + line_column(text, at) + ")");
+  // In an array: the element's index.
+  text = scene_2d().dump();
+  const std::size_t g = text.find("-9.81");
+  ASSERT_NE(g, std::string::npos);
+  text.replace(g, 5, "-1e999");
+  lines = load_errors("swmpm_1e999.json", text, &path);
+  ASSERT_EQ(lines.size(), 1u) << dump_lines(lines);
+  EXPECT_EQ(lines[0], path + ": /gravity/1: got -1e999, which is out of the range of a double; expected a finite number (" +
+                          line_column(text, g) + ")");
+}
+
+// Other syntax errors keep the file and a line:column, and say inside which value they are.
+TEST(SceneFile, TruncatedFileAndTrailingCommaGiveLineAndColumn) {
+  std::string text = scene_2d().dump(2);
+  const std::size_t comma = text.find("-9.81") + 5;
+  text.insert(comma, ",");
+  std::string path;
+  auto lines = load_errors("swmpm_trailing_comma.json", text, &path);
+  ASSERT_EQ(lines.size(), 1u) << dump_lines(lines);
+  // The error is at the first character after the comma that cannot start a value: the ']'.
+  const std::size_t bracket = text.find(']', comma);
+  EXPECT_EQ(lines[0].rfind(path + ": invalid JSON at " + line_column(text, bracket) + " (byte " +
+                               std::to_string(bracket + 1) + ") in /gravity: syntax error",
+                           0),
+            0u)
+      << lines[0];
+
+  const std::string whole = scene_2d().dump(2);
+  const std::string cut = whole.substr(0, whole.find("\"materials\"") + 20);
+  lines = load_errors("swmpm_truncated.json", cut, &path);
+  ASSERT_EQ(lines.size(), 1u) << dump_lines(lines);
+  EXPECT_EQ(lines[0].rfind(path + ": invalid JSON at " + line_column(cut, cut.size()), 0), 0u) << lines[0];
+  EXPECT_NE(lines[0].find("unexpected end of input"), std::string::npos) << lines[0];
+}
+
+// "Did you mean" compared a 200 kB value with every name in O(n m) time and memory (10 s, 3.2 GB);
+// messages echoed the whole value. Now bounded: quick, and each line short.
+TEST(SceneErrors, LongStringsAreQuickAndShortInMessages) {
+  json j = scene_2d();
+  const std::string long_key(1'000'000, 'k'), long_value(1'000'000, 'g');
+  j["grid"][long_key] = 1;
+  j["grid"]["shape_function"] = long_value;
+  j["bodies"][0]["solid"] = long_value;
+  j["loads"][0]["body"] = long_value;
+  const auto start = std::chrono::steady_clock::now();
+  const auto lines = problems(j);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(seconds, 1.0);
+  ASSERT_GE(lines.size(), 4u) << dump_lines(lines);
+  for (const auto& l : lines) EXPECT_LT(l.size(), 600u) << l.substr(0, 600);
+  EXPECT_TRUE(reports(j, "/grid/" + long_key.substr(0, 60) + "… (1000000 characters)",
+                      "unknown key \"" + long_key.substr(0, 60) + "… (1000000 characters)\", expected one of: "));
+  EXPECT_TRUE(reports(j, "/grid/shape_function",
+                      "got \"" + long_value.substr(0, 60) + "… (1000000 characters)\", expected one of: linear"));
+  EXPECT_TRUE(reports(j, "/bodies/0/solid", "got \"" + long_value.substr(0, 60) + "… (1000000 characters)\""));
+  EXPECT_TRUE(reports(j, "/loads/0/body", "got \"" + long_value.substr(0, 60) + "… (1000000 characters)\""));
+  // Suggestions still work for ordinary typos.
+  json k = scene_2d();
+  k["grid"]["shape_function"] = "gimpp";
+  EXPECT_TRUE(reports(k, "/grid/shape_function", "(did you mean \"gimp\"?)"));
+  k["grid"]["cel_size"] = 0.1;
+  EXPECT_TRUE(reports(k, "/grid/cel_size", "did you mean \"cell_size\"?"));
+}
+
+// An expression that is inf or NaN passed validation and the run diverged at step 1 ("J <= 0").
+// Initial velocities are evaluated at the corners and the centre of the body's bounds, load
+// functions at nine times from 0 to time.end.
+TEST(SceneErrors, ExpressionsMustHaveFiniteValues) {
+  json j = scene_2d();
+  j["bodies"][0]["initial"]["velocity"] = {"1/x", "sqrt(y - 0.5)"};
+  EXPECT_TRUE(reports(j, "/bodies/0/initial/velocity/0",
+                      "got \"1/x\", which is inf at (x, y) = (0, 0) m; expected an expression with a finite value over "
+                      "the body (evaluated at the corners and the centre of its bounds [0, 0]..[0.1, 1] m) [m/s]"));
+  EXPECT_TRUE(reports(j, "/bodies/0/initial/velocity/1", "got \"sqrt(y - 0.5)\", which is nan at (x, y) = (0, 0) m"));
+  for (const char* f : {"1/0", "exp(1e6)", "sqrt(t - 1)", "1/(t - 2)"}) {
+    json k = scene_2d();
+    k["loads"][0].erase("table");
+    k["loads"][0]["function"] = f;
+    EXPECT_TRUE(reports(k, "/loads/0/function", std::string("got \"") + f + "\", which is ")) << f << dump_lines(problems(k));
+    EXPECT_TRUE(reports(k, "/loads/0/function", "; expected an expression with a finite value over the run (evaluated "
+                                                "at 9 times from 0 to 2 s)"))
+        << f;
+  }
+  json k = scene_2d();
+  k["loads"][0].erase("table");
+  k["loads"][0]["function"] = "1/(t + 1)";
+  k["bodies"][0]["initial"]["velocity"] = {"y > 0.5 ? 1 : -1", "exp(-x)"};
+  EXPECT_TRUE(problems(k).empty()) << dump_lines(problems(k));
 }
 
 // ---- one test per class of error -------------------------------------------------------------
