@@ -252,7 +252,9 @@ std::vector<Problem> check_formulation(const nlohmann::json& raw, const Scene& s
   if (reads_K && raw.contains("materials") && raw["materials"].is_array())
     for (std::size_t i = 0; i < raw["materials"].size(); ++i) {
       const nlohmann::json& m = raw["materials"][i];
-      if (m.is_object() && m.value("model", "") == "fluid" && !m.contains("bulk_modulus"))
+      // (a model that is not a string is the parser's error; value("model", "") would throw on it)
+      const bool fluid = m.is_object() && m.contains("model") && m["model"] == "fluid";
+      if (fluid && !m.contains("bulk_modulus"))
         problems.push_back({"/materials/" + std::to_string(i) + "/bulk_modulus",
                             "missing required key, expected a positive number [Pa] (" + row.name +
                                 " models the water as weakly compressible)"});
