@@ -27,6 +27,7 @@
 #include "scene/input.hpp"
 #include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
+#include "solver/cpu_load.hpp"
 #include "solver/formulation.hpp"
 #include "solver/formulations/registry.hpp"
 #include "solver/materials/material.hpp"
@@ -306,6 +307,7 @@ class Runner {
         }
         write_outputs(due);
         show_progress();
+        adapt_threads();
       }
       if (tty_) std::fprintf(stderr, "\r%*s\r", 90, "");
       finish();
@@ -370,7 +372,7 @@ class Runner {
     if (!opt_.resume) estimate_cost();
     reporters_ = make_materials<Dim>(scene_);  // frames' material state fields (pure functions of the particles)
     compression_ = scene::vtu_compression(scene_.output.compression);
-    threads_ = omp_get_max_threads();
+    threads_ = threads_now_ = threads_fewest_ = omp_get_max_threads();
     // --resume: the checkpoint must be this scene's and this version's.
     if (opt_.resume) resume_ = read_checkpoint(f_->name());
   }
@@ -576,6 +578,33 @@ class Runner {
 
   /// The loads' clock: loads act during the initialisation phase (t < 0) as they do at t = 0.
   static double load_clock(double t) { return std::max(t, 0.0); }
+
+  /// Fewer threads than asked while other processes keep cores busy (CpuLoad), checked every second
+  /// of wall time: down at once, back up when two checks agree. Results do not depend on it.
+  void adapt_threads() {
+    if (threads_ <= 1) return;
+    const auto now = std::chrono::steady_clock::now();
+    // The first look after 0.3 s (a short run on a loaded machine gains most from it), then every 1 s.
+    if (std::chrono::duration<double>(now - last_load_check_).count() < (threads_checked_ ? 1.0 : 0.3)) return;
+    threads_checked_ = true;
+    last_load_check_ = now;
+    const double others = cpu_load_.others_busy_cores();
+    if (others < 0.0) return;
+    const int free = std::clamp(static_cast<int>(std::floor(cpu_load_.cores() - others + 0.3)), 1, threads_);
+    if (free == threads_now_ || (free > threads_now_ && ++raise_votes_ < 2)) {
+      if (free == threads_now_) raise_votes_ = 0;
+      return;
+    }
+    raise_votes_ = 0;
+    omp_set_num_threads(free);
+    std::ostringstream os;
+    os << "threads: " << free << " of " << threads_ << " from t = " << state_.time << " s (other processes keep "
+       << std::setprecision(2) << others << " of " << cpu_load_.cores() << " cores busy)";
+    if (tty_) std::fprintf(stderr, "\r%*s\r", 90, "");
+    log_.line(os.str());
+    threads_now_ = free;
+    threads_fewest_ = std::min(threads_fewest_, free);
+  }
 
   void show_progress() {
     if (!tty_) return;
@@ -915,6 +944,7 @@ class Runner {
     rj["checkpoints"] = checkpoints_;
     rj["checkpoint_seconds"] = checkpoint_seconds_;  // part of loop_seconds
     rj["threads"] = threads_;
+    rj["threads_fewest"] = threads_fewest_;  // fewer while other processes kept cores busy
     rj["us_per_particle_step"] = us_pps;
     rj["loop_us_per_particle_step"] = loop_us_pps;
     if (f_->fluid_nodes() > 0) {
@@ -983,6 +1013,10 @@ class Runner {
   SolveOptions opt_;
   FormulationFactory<Dim> factory_;  // empty: the scene's formulation
   Log log_;
+  CpuLoad cpu_load_;  // other processes' load: adapt_threads
+  int threads_now_ = 1, threads_fewest_ = 1, raise_votes_ = 0;
+  bool threads_checked_ = false;
+  std::chrono::steady_clock::time_point last_load_check_ = std::chrono::steady_clock::now();
   scene::RunEstimate estimate_;                // a fresh run's cost, from its first step
   std::vector<std::string> estimate_warnings_;  // soft limits passed
   scene::Scene scene_;
