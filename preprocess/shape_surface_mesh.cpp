@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "preprocess/shape_types.hpp"
@@ -56,6 +57,20 @@ std::string surface_header_problem(const std::string& file) {
     // A vertex is at least "0 0 0\n" (6 bytes) or 12 binary bytes; a face at least "3 0 1 2\n".
     if (6.0 * counts[0] + 8.0 * counts[1] > bytes)
       return declares(counts[0] + counts[1], "vertices and faces", 6.0);
+    // Each face's corner count: CGAL reserves it (a face of "1e12" corners cost std::bad_alloc).
+    std::getline(in, token);  // the rest of the counts' line
+    const long vertices = static_cast<long>(counts[0]);
+    for (long v = 0; v < vertices && std::getline(in, token);)
+      if (!token.empty() && token[0] != '#') ++v;
+    for (long f = 0; f < static_cast<long>(counts[1]) && std::getline(in, token);) {
+      std::istringstream face(token);
+      double corners = 0.0;
+      if (token.empty() || token[0] == '#' || !(face >> corners)) continue;
+      if (!(corners >= 3.0 && corners <= counts[0]))
+        return "face " + std::to_string(f) + " has " + token.substr(0, token.find_first_of(" \t")) + " corners, expected 3 to " +
+               std::to_string(vertices) + " (the file's vertices): a corrupt surface file";
+      ++f;
+    }
   } else if (ext == ".stl") {
     char head[5] = {0, 0, 0, 0, 0};
     in.read(head, 5);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <new>
 
 #include "preprocess/shape_types.hpp"
 
@@ -141,6 +142,11 @@ std::vector<std::unique_ptr<Shape>> make_shapes(const scene::Scene& s) {
                                   s.grid.cell_size / s.bodies[b].particles_per_cell));
     } catch (const GeometryError& e) {
       problem(path + "/" + e.key(), e.what());
+      shapes.push_back(nullptr);
+      continue;
+    } catch (const std::bad_alloc&) {  // a file whose contents ask for more than the memory there is
+      problem(path + "/file", g.file + ": reading it needs more memory than this process may have; expected a "
+                                       "valid geometry file (is it corrupt?)");
       shapes.push_back(nullptr);
       continue;
     }

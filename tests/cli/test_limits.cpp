@@ -137,6 +137,26 @@ TEST(ResourceLimits, ASurfaceFileDeclaringMoreThanItHoldsIsRefused) {
   EXPECT_LT(p.seconds, 20.0);
 }
 
+// Found by FuzzSlow: sphere.off with one face of "1e12" corners. CGAL reserved them:
+// std::bad_alloc, exit 1, no path.
+TEST(ResourceLimits, ASurfaceFaceWithAbsurdCornersIsRefused) {
+  json s = column_scene();
+  s["dimension"] = 3;
+  s["grid"] = {{"cell_size", 0.1}, {"min", {0, 0, 0}}, {"max", {1, 1, 1}}, {"shape_function", "gimp"}};
+  s["gravity"] = {0.0, -9.81, 0.0};
+  s["bodies"][0]["geometry"] = {{"type", "surface-mesh"}, {"file", "sphere.off"}};
+  s["boundaries"] = json::array();
+  s["output"]["monitors"] = json::array();
+  std::string off = swmpm::testing::read_text(SWMPM_SOURCE_DIR "/geometries/sphere.off");
+  const std::size_t face = off.find("\n3 ", off.find("\n3 ") + 1);  // the second face line
+  off.replace(face + 1, 1, "1e12");
+  const Probe p = preprocess("off-face", s, "", {{"sphere.off", off}});
+  EXPECT_EQ(p.r.status, 2) << p.r.err;
+  EXPECT_NE(p.r.err.find("/bodies/0/geometry/file"), std::string::npos) << p.r.err;
+  EXPECT_NE(p.r.err.find("has 1e12 corners, expected 3 to 162"), std::string::npos) << p.r.err;
+  EXPECT_FALSE(fs::exists(p.dir / "run"));
+}
+
 // A .geo with a mesh size of 1e-5 m on the 0.1 x 1 m column: 2e10 triangles, meshed for ever. The
 // mesh is now no finer than an eighth of the particle spacing, and the body seeds as the box does.
 TEST(ResourceLimits, AGeoMeshSizeFarBelowTheParticleSpacingMeshesQuickly) {
