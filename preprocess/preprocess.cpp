@@ -153,8 +153,8 @@ void reject_free_water(const scene::Scene& s, const std::vector<BodyContent>& co
       throw scene::SceneError({s.source_file + ": /bodies/" + std::to_string(b) + ": body \"" + s.bodies[b].name +
                                "\" is free water (a fluid without a solid), which \"" + scene::to_string(s.formulation) +
                                "\" cannot represent (a single-point particle is a skeleton with water in its pores); "
-                               "expected a double-point formulation (\"semi-implicit-double-point\", "
-                               "\"explicit-double-point\") or \"mpm-fem\""});
+                               "expected \"explicit-double-point\" or \"mpm-fem\" (semi-implicit-double-point "
+                               "does not model free water either)"});
 }
 
 /// Indices of the points whose body satisfies `keep`.

@@ -32,18 +32,22 @@ struct StepContext {
 
 /// Why a step failed: the smallest particle index with a problem, or else the smallest grid node
 /// (flat index) with one, and what it was. A particle report takes precedence over a node report.
+/// `remedy`: what to change, when the formulation knows (a state out of physical bounds that a
+/// scene switch removes); empty: the time loop's generic advice (a smaller dt, the loads).
 struct Health {
   long particle = -1;
   long node = -1;
   std::array<double, 3> node_x{0, 0, 0};  // m, the failed node's position (node >= 0)
   std::string phase;
   std::string what;
+  std::string remedy;
   bool ok() const { return particle < 0 && node < 0; }
-  void report(long p, std::string ph, std::string w) {
+  void report(long p, std::string ph, std::string w, std::string r = {}) {
     if (p >= 0 && (particle < 0 || p < particle)) {
       particle = p;
       phase = std::move(ph);
       what = std::move(w);
+      remedy = std::move(r);
     }
   }
   /// A value at grid node `i` (at `x`) went bad: kept unless a particle or a smaller node was reported.
@@ -53,6 +57,7 @@ struct Health {
       node_x = x;
       phase = std::move(ph);
       what = std::move(w);
+      remedy.clear();
     }
   }
 };

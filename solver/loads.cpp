@@ -320,7 +320,9 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, con
   for (std::size_t i = 0; i < s.loads.size(); ++i) {
     const auto& load = s.loads[i];
     const int body = body_index(load.body);
-    Entry e{{}, {}, {}, TimeFunction(load.function), false};
+    Entry e{{}, {}, {}, TimeFunction(load.function), false, 0.0};
+    for (int a = 0; a < (load.type == "pressure" ? 1 : Dim); ++a) e.stress += load.value[a] * load.value[a];
+    e.stress = std::sqrt(e.stress);
     if (!is_axis_face(load.face)) {
       // A named surface: the particles preprocess tagged within one lattice spacing of it share
       // its samples, so the load carries the surface's exact length or area at any angle.
@@ -355,7 +357,7 @@ ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, con
     if (!ps.two_phase())
       throw std::runtime_error(where + ": a prescribed pore pressure needs pore fluid on the particles; this "
                                "formulation's particles carry none");
-    Entry e{{}, {}, {}, TimeFunction(scene::TimeFunction{}), true};
+    Entry e{{}, {}, {}, TimeFunction(scene::TimeFunction{}), true, std::abs(b.fluid_value)};
     auto wet = [&](std::size_t p) { return ps.fluid_material[p] >= 0; };
     if (!is_axis_face(b.on)) {
       const int k = surface_index(s, b.on, "boundaries/" + std::to_string(i) + "/on");

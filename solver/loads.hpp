@@ -1,6 +1,7 @@
 // Time functions, boundary conditions on grid faces, and particle loads (tractions, pressures).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -98,6 +99,13 @@ class ParticleLoads {
   /// Number of particles a load acts on (to report and test the tagging); loads come first, in
   /// scene order, then prescribed pore pressures in the order of `boundaries`.
   std::size_t particles(std::size_t load) const { return entries_[load].ids.size(); }
+  /// The largest stress the loads apply at time t (Pa): |traction|, |pressure| or a prescribed
+  /// pore pressure's |p|, times |f(t)|; 0 without loads. The scale of physical-bounds checks.
+  double stress_scale(double t) const {
+    double s = 0.0;
+    for (const auto& e : entries_) s = std::max(s, e.stress * std::abs(e.fn(t)));
+    return s;
+  }
   /// Sum of the load's forces at f(t) = 1 (N, or N/m in 2D).
   Vec<Dim> resultant(std::size_t load) const {
     Vec<Dim> r = Vec<Dim>::Zero();
@@ -112,6 +120,7 @@ class ParticleLoads {
     std::vector<Vec<Dim>> offset;  // m, from the particle centre to its point of action
     TimeFunction fn;
     bool split = false;  // a prescribed pore pressure: shared between the phases by porosity
+    double stress = 0.0;  // Pa at f(t) = 1: |traction|, |pressure| or |prescribed pore pressure|
   };
   std::vector<Entry> entries_;
 };

@@ -842,7 +842,7 @@ class Runner {
     if (p < 0 || p >= static_cast<long>(now.size())) {
       os << h.phase << " " << h.what;
       when();
-      os << ". Try a smaller dt (or cfl), or check the loads.";
+      os << ". " << (h.remedy.empty() ? "Try a smaller dt (or cfl), or check the loads." : h.remedy);
       return os.str();
     }
     ParticleSet<Dim> before;  // the last good snapshot's set, which may hold the particles in another order
@@ -863,7 +863,9 @@ class Runner {
       os << "now at (";
     }
     for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << now.x[p][a];
-    os << "). Try a smaller dt (or cfl), a finer output interval to see the onset, or check the loads.";
+    os << "). "
+       << (h.remedy.empty() ? "Try a smaller dt (or cfl), a finer output interval to see the onset, or check the loads."
+                            : h.remedy);
     return os.str();
   }
 

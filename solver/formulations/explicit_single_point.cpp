@@ -19,6 +19,8 @@
 //   (7) effective stress (material model), pore pressure rate (eq. 9 with the n div v_f erratum)
 //       through the node-based multi-field variational step with Q = [1], linear or quadratic
 //       (eqs. 33-34)
+//   (9) physical bounds: a suction beyond cavitation and beyond twice the scene's stress scale
+//       stops the run, naming the remedy (issue 27; docs/formulations.md, "Pore pressure bound")
 #include <omp.h>
 
 #include <limits>
@@ -94,6 +96,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     fluid_.resize(grid_.num_nodes());
     drag_.assign(grid_.num_nodes(), 0.0);
     if (conservative_) porosity_.assign(grid_.num_nodes(), {0.0, 0.0});
+    stress_scale0_ = initial_stress_scale(s, state.solid);
   }
 
   std::string name() const override { return "explicit-single-point"; }
@@ -159,6 +162,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     }
     bad = update_pore_pressure(ps, dt);
     if (bad >= 0) st.health.report(bad, "solid", "pore pressure not finite");
+    check_suction(st, ctx.t);                                                            // (9)
     lap("stress and pressure");
   }
 
@@ -230,10 +234,19 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
   // Restart: the last step's schedule order, which the next step's reordering (0) reads; every
   // other field is rebuilt by each step from the particles.
-  void save(Checkpoint& c) const override { save_order(c, "formulation/schedule_order", schedule_); }
+  // The largest load so far and the steps beyond the suction bound (9) so far are carried too.
+  void save(Checkpoint& c) const override {
+    save_order(c, "formulation/schedule_order", schedule_);
+    c.put("formulation/load_scale", std::vector<double>{load_scale_, static_cast<double>(suction_steps_)});
+  }
   void restore(const Checkpoint& c, State<Dim>& st) override {
     regroup_by_material(st.solid, material_particles_);  // the checkpoint's particle order
     restore_order(c, "formulation/schedule_order", schedule_);
+    if (c.has("formulation/load_scale")) {  // absent in checkpoints written before it existed
+      std::vector<double> v;
+      c.get("formulation/load_scale", v);
+      if (v.size() == 2) load_scale_ = v[0], suction_steps_ = static_cast<long>(v[1]);
+    }
   }
 
  private:
@@ -440,6 +453,77 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     return bad == transfer::no_particle ? -1 : bad;
   }
 
+  /// The stress scale S0 of the initial state (Pa), for the suction bound (9): the largest of
+  ///   |p| and |sigma'_ij| at any point (an initial or geostatic state),
+  ///   rho_sat g H (the weight of the particles' full height H, gravity unramped),
+  ///   sqrt(M rho_sat) |v|max (the water-hammer pressure rho c v of the initial velocities against
+  ///   a rigid wall, c the undrained P-wave speed, M = K' + 4G/3 + K_f/n).
+  /// The loads' stresses are added as the run goes (loads_.stress_scale).
+  double initial_stress_scale(const scene::Scene& s, const ParticleSet<Dim>& ps) const {
+    double scale = 0.0, rho_max = 0.0, rho_c = 0.0, v_max = 0.0;
+    double y_lo = std::numeric_limits<double>::infinity(), y_hi = -y_lo;
+    for (std::size_t k = 0; k < materials_.size(); ++k) {
+      if (material_particles_[k].empty() || !materials_[k]) continue;
+      const double M_s = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
+      for (int p : material_particles_[k]) {
+        const bool wet = ps.fluid_material[p] >= 0;
+        if (wet) scale = std::max(scale, std::abs(ps.p[p]));
+        for (int c = 0; c < 6; ++c) scale = std::max(scale, std::abs(ps.sigma[p][c]));
+        const double rho = (ps.m[p] + ps.m_f[p]) / ps.V[p];
+        rho_max = std::max(rho_max, rho);
+        rho_c = std::max(rho_c, std::sqrt((M_s + (wet ? pore_[k].K_f / ps.n[p] : 0.0)) * rho));
+        v_max = std::max(v_max, std::max(ps.v[p].norm(), ps.v_f[p].norm()));
+        y_lo = std::min(y_lo, ps.x[p][1] - ps.l[p][1]);
+        y_hi = std::max(y_hi, ps.x[p][1] + ps.l[p][1]);
+      }
+    }
+    const double g = std::sqrt(s.gravity[0] * s.gravity[0] + s.gravity[1] * s.gravity[1] + s.gravity[2] * s.gravity[2]);
+    if (y_hi > y_lo) scale = std::max(scale, rho_max * g * (y_hi - y_lo));
+    return std::max(scale, rho_c * v_max);
+  }
+
+  /// (9) Physical bounds of the pore pressure. The formulation models a saturated skeleton whose
+  /// pore water carries any tension; real water cavitates when its absolute pressure nears zero,
+  /// i.e. at a gauge pressure of about -100 kPa, and the soil then desaturates, which is not
+  /// modelled. Beyond that, a suction is still a solution of the model when the loads produce it
+  /// (undrained unloading takes at most the whole change of total stress, B <= 1). A sudden load
+  /// or release at most doubles a linear response. So a point is out of bounds when
+  ///   p < -2 max(p_cav, S),   p_cav = 100 kPa,  S = max(S0, the largest load stress so far),
+  /// S0 from initial_stress_scale, for `persistent_steps` steps in a row: a wave or an impact
+  /// passes a point within a few steps (it moves cfl cells per step), whereas the seed's scheme at
+  /// large strain holds its pore-pressure mode (p of several q of either sign between particle rows,
+  /// examples/large-strain-consolidation/README.md) for the rest of the run. Measured 2026-12-05:
+  /// the longest streak beyond the bound is 32 steps on A5 at cfl 0.9 (a spike to -809 kPa), 16 on
+  /// the unstabilised A3 small reading; 9068 on A5 without stabilisation (-2.5 MPa), about 1.8e5
+  /// on the large-strain columns. The run then stops (status diverged) and names the remedy.
+  void check_suction(State<Dim>& st, double t) {
+    const ParticleSet<Dim>& ps = st.solid;
+    load_scale_ = std::max(load_scale_, loads_.stress_scale(t));
+    const double scale = std::max(stress_scale0_, load_scale_);        // Pa, S
+    const double limit = 2.0 * std::max(cavitation_suction, scale);  // Pa
+    const long n = static_cast<long>(ps.size());
+    long bad = transfer::no_particle;
+#pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
+    for (long p = 0; p < n; ++p)
+      if (ps.fluid_material[p] >= 0 && ps.p[p] < -limit) bad = std::min(bad, p);
+    suction_steps_ = bad == transfer::no_particle ? 0 : suction_steps_ + 1;
+    if (suction_steps_ < persistent_steps) return;
+    std::ostringstream what, remedy;
+    what << "has pore pressure " << ps.p[bad] << " Pa, below -" << limit
+         << " Pa (twice the larger of water's cavitation suction, about 100 kPa, and the largest stress the scene "
+            "applies, "
+         << scale << " Pa), somewhere in the body for " << suction_steps_
+         << " steps in a row: a suction a saturated skeleton cannot hold (this formulation models no desaturation)";
+    if (!(cell_pressure_ && conservative_))
+      remedy << "At large strain this is the pore-pressure mode of the seed's scheme (the mfvp pressure step "
+                "with eq. 9); use \"solver\": {\"continuity\": \"conservative\", \"stabilisation\": "
+                "{\"pressure\": \"cell-constant\"}} (docs/formulations.md, \"Cell-constant pressure and "
+                "conservative continuity\").";
+    else
+      remedy << "Try a smaller dt (or cfl), or check the loads and the boundary conditions.";
+    st.health.report(bad, "solid", what.str(), remedy.str());
+  }
+
   /// (8) F_{n+1} = dF F_n, V = det F V0; porosity from (1 - n) V = const (eq. 4, incompressible
   /// grains); fluid mass n rho_f V.
   long update_volumes(ParticleSet<Dim>& ps, double dt) {
@@ -491,6 +575,11 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   Reorder<Dim> reorder_;
   FBar<Dim, S> fbar_;
   static constexpr long reorder_interval = 10;  // steps
+  static constexpr double cavitation_suction = 1.0e5;  // Pa, gauge: water's absolute pressure near zero
+  double stress_scale0_ = 0.0;  // Pa, S0 of the suction bound (9)
+  double load_scale_ = 0.0;     // Pa, the largest load stress so far
+  long suction_steps_ = 0;      // consecutive steps with a point beyond the bound
+  static constexpr long persistent_steps = 100;
 };
 
 }  // namespace

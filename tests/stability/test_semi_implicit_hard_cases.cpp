@@ -265,84 +265,9 @@ TEST(SemiImplicitHardCases, LargeStrainColumnOnBsplinesNeedsTheModifiedFbar) {
   EXPECT_LT(modified.n_max, 0.22);
 }
 
-namespace {
-
-/// A saturated bed (1 m wide, 0.4 m deep, E = 10 MPa, geostatic k0 = 0.5) under 0.2 m of free
-/// water, both hydrostatic from the pond's surface, double-point with bspline2, dt at 0.9 of the
-/// soil CFL. The nodes along the bed's surface hold far more water than soil.
-json pond_over_bed(double k, const std::string& drag) {
-  json s = {{"name", "pond-over-bed"},
-            {"dimension", 2},
-            {"formulation", "semi-implicit-double-point"},
-            {"gravity", {0.0, -9.81}},
-            {"grid", {{"cell_size", 0.05}, {"min", {0.0, 0.0}}, {"max", {1.0, 0.8}}, {"shape_function", "bspline2"}}},
-            {"materials",
-             {{{"name", "sand"}, {"model", "linear-elastic"}, {"grain_density", 2650.0}, {"porosity", 0.4},
-               {"youngs_modulus", 1e7}, {"poisson_ratio", 0.3}, {"hydraulic_conductivity", k}},
-              {{"name", "water"}, {"model", "fluid"}, {"density", 1000.0}, {"bulk_modulus", 2.2e9}}}},
-            {"bodies",
-             {{{"name", "bed"},
-               {"geometry", {{"type", "box"}, {"min", {0.0, 0.0}}, {"max", {1.0, 0.4}}}},
-               {"solid", "sand"},
-               {"fluid", "water"},
-               {"particles_per_cell", 2},
-               {"initial", {{"stress", "geostatic"}, {"k0", 0.5}, {"pore_pressure", "hydrostatic"}, {"water_table", 0.6}}}},
-              {{"name", "pond"},
-               {"geometry", {{"type", "box"}, {"min", {0.0, 0.4}}, {"max", {1.0, 0.6}}}},
-               {"fluid", "water"},
-               {"particles_per_cell", 2},
-               {"initial", {{"pore_pressure", "hydrostatic"}, {"water_table", 0.6}}}}}},
-            {"boundaries",
-             {{{"on", "x_min"}, {"solid", "roller"}, {"fluid", "impermeable"}},
-              {{"on", "x_max"}, {"solid", "roller"}, {"fluid", "impermeable"}},
-              {{"on", "y_min"}, {"solid", "fixed"}, {"fluid", "impermeable"}}}},
-            {"time", {{"end", 0.5}, {"cfl", 0.9}}},
-            {"output", {{"interval", 0.25}}}};
-  if (!drag.empty()) s["solver"] = {{"drag_integration", drag}};
-  return s;
-}
-
-}  // namespace
-
-// Free water over soil (a submerged bed, the water over a landslide's toe, a seepage exit): the
-// seed's predictor (solver.drag_integration "semi-implicit", eqs. 52-53) takes the water's drag
-// implicitly but the soil's from v_s^t, which maps the relative velocity r to
-// r M_w (1 - a/M_s) / (M_w + a) (a = dt Q): x 10-20 per step at the bed's surface nodes, where
-// M_w / M_s is large. The implicit drag (default) maps r to r / (1 + a/M_w + a/M_s) for any masses.
-// Measured (2026-12-02): semi-implicit diverges by the energy check in 20 steps (k = 1e-3) and
-// 10 steps (k = 1e-5); implicit keeps the bed at rest for 0.5 s at both k (|v_s| < 1e-5 m/s;
-// the pond's top row of water points moves 2.6-4.4 mm/s, its free surface on B-splines; p in the
-// bed's lowest cell 0.4-0.7 % off hydrostatic).
-TEST(SemiImplicitHardCases, FreeWaterOverSoilNeedsTheImplicitDrag) {
-  for (const double k : {1e-3, 1e-5}) {
-    int rc = 0;
-    const std::string seed = swmpm::testing::run_scene(pond_over_bed(k, "semi-implicit"), "si-pond-semi", 0, &rc);
-    const auto rs = swmpm::testing::load_json(seed + "/run.json");
-    EXPECT_EQ(rs["status"], "diverged") << "k = " << k;
-    EXPECT_LT(rs["steps"].get<long>(), 100) << "k = " << k;
-
-    const std::string run = swmpm::testing::run_scene(pond_over_bed(k, ""), "si-pond-implicit");
-    const auto rj = swmpm::testing::load_json(run + "/run.json");
-    ASSERT_EQ(rj["status"], "completed") << "k = " << k;
-    const auto soil = swmpm::testing::last_frame(run), water = swmpm::testing::last_frame(run, "fluid");
-    auto speed = [](const swmpm::scene::PointCloud& f) {
-      const auto& v = f.get("velocity", "last").values;
-      double m = 0.0;
-      for (std::size_t a = 0; a < f.size(); ++a) m = std::max(m, std::hypot(v[3 * a], v[3 * a + 1]));
-      return m;
-    };
-    const double vs_max = speed(soil), vw_max = speed(water);
-    double p_err = 0.0;
-    // Water points in the bed's lowest cell: p against rho_w g (0.6 m - y).
-    const auto& p = water.get("pore_pressure", "last").values;
-    for (std::size_t a = 0; a < water.size(); ++a)
-      if (water.points[a][1] < 0.05)
-        p_err = std::max(p_err, std::abs(p[a] / (1000.0 * 9.81 * (0.6 - water.points[a][1])) - 1.0));
-    std::printf("pond over bed, k = %g: semi-implicit %s after %ld steps; implicit max |v_s| %.3g m/s, max |v_w| %.3g "
-                "m/s, base p error %.4f\n",
-                k, rs["status"].get<std::string>().c_str(), rs["steps"].get<long>(), vs_max, vw_max, p_err);
-    EXPECT_LT(vs_max, 1e-4) << "k = " << k;  // the bed at rest
-    EXPECT_LT(vw_max, 1e-2) << "k = " << k;  // the pond's top row of points settles a few mm/s
-    EXPECT_LT(p_err, 0.01) << "k = " << k;
-  }
-}
+// Free water over soil (a bed under a pond) was SemiImplicitHardCases.FreeWaterOverSoilNeedsTheImplicitDrag:
+// the seed's drag (`drag_integration: semi-implicit`) diverged within 20 steps where the nodes hold
+// far more water than soil, the implicit drag kept the bed at rest (|v_s| < 3e-6 m/s over 0.5 s).
+// semi-implicit-double-point now refuses free-water bodies (issue 27, item 8: free water alone did
+// not run, a dam break created energy at t = 0.14 s), so that scene is refused up front
+// (tests/cli/test_free_water_semi_implicit.cpp); the measurement stays in docs/formulations.md.

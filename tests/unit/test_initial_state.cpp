@@ -245,7 +245,8 @@ TEST(InitialState, EffectiveStressIsTheBuoyantWeightBelowTheTable) {
 
 TEST(InitialState, SubmergedSoilUnderFreeWaterKeepsTheBuoyantEffectiveStress) {
   // Sand 0..1 under free water 1..1.5 (double-point): the water's weight goes to the pore pressure.
-  json j = base_scene("semi-implicit-double-point");
+  // explicit-double-point: semi-implicit-double-point refuses free water (issue 27, item 8).
+  json j = base_scene("explicit-double-point");
   j["bodies"] = json::array({box_body("sand", 0, 0, 1, 1), box_body("lake", 0, 1, 1, 1.5)});
   j["bodies"][0]["solid"] = "sand";
   j["bodies"][0]["fluid"] = "water";
@@ -328,13 +329,13 @@ TEST(Seeding, DoublePointWritesCoincidentSolidAndFluidSets) {
 }
 
 TEST(Seeding, FreeWaterIsFluidParticlesOnly) {
-  // A run directory that held a saturated scene's solid.vtu before: it must not survive (a double-point
-  // formulation that has a solver: preprocess refuses explicit-double-point until it has one).
-  json sat = saturated_box("semi-implicit-double-point", json::object());
+  // A run directory that held a saturated scene's solid.vtu before: it must not survive. In
+  // explicit-double-point: semi-implicit-double-point refuses free water (issue 27, item 8).
+  json sat = saturated_box("explicit-double-point", json::object());
   const fs::path first = preprocess_into(sat, "free-water");
   ASSERT_TRUE(fs::exists(first / "particles" / "solid.vtu"));
 
-  json j = base_scene("semi-implicit-double-point");
+  json j = base_scene("explicit-double-point");
   j["bodies"] = json::array({box_body("lake", 0, 0, 2, 1)});
   j["bodies"][0]["fluid"] = "water";
   j["bodies"][0]["initial"] = {{"pore_pressure", "hydrostatic"}};

@@ -26,6 +26,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
 #include <vector>
 
 #include "scene/scene.hpp"
@@ -139,21 +142,25 @@ HistoryError history_error(const std::string& run, double K_f, const char* label
 
 }  // namespace
 
-TEST(LargeStrainConsolidation, A2FinalSettlementMatchesLogStrainClosedForm) {
-  // Softened K_f, k = 1e-3: U = 99.7 % of the constant-k reference at 16 s; 2 s frames.
-  const std::string run = swmpm::testing::run_scene(scene_a2("linear-elastic", 2.2e7, 1.0e-3, 16.0, 2.0, 0.0), "a2-final");
-  const auto entries = swmpm::scene::read_pvd(run + "/output/results.pvd");
-  ASSERT_GE(entries.size(), 3u);
-  const double S_inf = H * (1.0 - std::exp(-q / E));  // 0.181269 m
-  const double S = final_settlement(run);
-  const double S_before =
-      top_surface(swmpm::scene::read_vtu(run + "/output/" + entries[entries.size() - 2].file), "frame").settlement;
-  std::printf("A2 final settlement %.5f m (at %.1f s: %.5f m) vs H(1 - exp(-q/E)) = %.5f m: %+.2f %%\n", S,
-              entries[entries.size() - 2].time, S_before, S_inf, 100.0 * (S / S_inf - 1.0));
-  // Measured 2026-11-22: 0.18080 m, -0.26 % (the small-strain end state, qH/E = 0.2 m, would be +10 %;
-  // hencky's 0.1554 m -14 %). 10-16 s wall on the shared 2-vCPU machine.
-  EXPECT_NEAR(S / S_inf, 1.0, 0.02);
-  EXPECT_LT(std::abs(S - S_before) / S_inf, 0.005);  // settled: measured 0.08 % over the last 2 s
+// The seed's scheme (mfvp-constant + smoothing, eq. 9) on A2 (softened K_f, k = 1e-3, 16 s) used to
+// "complete" with the settlement -0.26 % off but the pore pressures frozen at -1.12 ... +1.29 MPa
+// (+-5.6 q, where 0 is right) and J 0.772 ... 0.864 (measured 2026-11-22 and again 2026-12-05). The
+// pore-pressure bound now stops it (issue 27, item 7): status diverged, the remedy named.
+TEST(LargeStrainConsolidation, A2SeedSchemeIsStoppedByThePorePressureBound) {
+  int rc = 0;
+  const std::string run =
+      swmpm::testing::run_scene(scene_a2("linear-elastic", 2.2e7, 1.0e-3, 16.0, 2.0, 0.0), "a2-final", 0, &rc);
+  const auto rj = swmpm::testing::load_json(run + "/run.json");
+  const std::string diagnosis = rj.value("diagnosis", "");
+  std::printf("A2 seed scheme: exit %d, %s at t = %.4f s: %s\n", rc, rj["status"].get<std::string>().c_str(),
+              rj["end_time"].get<double>(), diagnosis.c_str());
+  EXPECT_EQ(rc, 3);
+  EXPECT_EQ(rj["status"], "diverged");
+  EXPECT_NE(diagnosis.find("below -400000 Pa"), std::string::npos) << diagnosis;  // 2 q
+  EXPECT_NE(diagnosis.find(R"("continuity": "conservative", "stabilisation": {"pressure": "cell-constant"})"),
+            std::string::npos)
+      << diagnosis;
+  EXPECT_LT(rj["end_time"].get<double>(), 3.0);  // measured 2026-12-05: t = 1.108 s, particle 16 at y = 0.11 m, -407 kPa
 }
 
 // The same end state with the example's scheme (examples/large-strain-consolidation/scene-fast.json).
@@ -171,12 +178,15 @@ TEST(LargeStrainConsolidation, HenckyKirchhoffLawSettlesToItsOwnClosedForm) {
   double J = 0.85;
   for (int i = 0; i < 50; ++i) J -= (E * std::log(J) + q * J) / (E / J + q);
   const double S_hencky = H * (1.0 - J);  // 0.15541 m
-  const std::string run = swmpm::testing::run_scene(scene_a2("hencky", 2.2e7, 1.0e-3, 16.0, 16.0, 0.0), "a2-hencky");
+  // The consistent scheme: the seed's ended at -525 ... +553 kPa (+-2.7 q) and stops on the
+  // pore-pressure bound now (issue 27, item 7).
+  const std::string run =
+      swmpm::testing::run_scene(scene_a2("hencky", 2.2e7, 1.0e-3, 16.0, 16.0, 0.0, Scheme::consistent), "a2-hencky");
   const double S = final_settlement(run);
   std::printf("A2 with hencky: final settlement %.5f m vs H(1 - J), E ln J = -q J: %.5f m (%+.2f %%); "
               "log-strain Cauchy law %.5f m\n",
               S, S_hencky, 100.0 * (S / S_hencky - 1.0), H * (1.0 - std::exp(-q / E)));
-  // Measured 2026-11-22: 0.15538 m, -0.03 %. 13-14 s wall.
+  // Measured 2026-12-05 (consistent scheme): 0.15595 m, +0.34 %, 12 s wall. The seed's scheme: 0.15538 m, -0.03 %.
   EXPECT_NEAR(S / S_hencky, 1.0, 0.02);
 }
 
@@ -237,6 +247,65 @@ TEST(LargeStrainConsolidation, A2WithoutThePorosityGradientTermsConsolidatesTooF
       scene_a2("linear-elastic", 2.2e7, 1.0e-4, 3.0, 1.0, 0.0, Scheme::consistent_eq9), "a2-eq9");
   const HistoryError e = history_error(run, 2.2e7, "cell-constant, eq. 9");
   EXPECT_GT(e.settlement, 0.15);  // measured 2026-12-02: +26.5 / +31.3 / +30.2 % at 1 / 2 / 3 s
+}
+
+// Issue 27, item 7, "wrong but finite": a 1 m column at about 14 % strain with the solver block left
+// out (the seed's defaults: mfvp-linear, eq. 9, strain smoothing). E = 2 MPa, q = p0 = 300 kPa
+// (S_inf = H (1 - e^(-q/E)) = 0.13929 m, J = 0.861), water's K_f = 2.2 GPa, k = 1e-2 m/s
+// (c_v = k E / gamma_w = 2.0 m^2/s: consolidated within 1 s), dt auto (cfl 0.5).
+// Before the bound the defaults "completed" 2 s with the settlement -0.10 % off but the pore
+// pressures frozen at -1.21 ... +1.58 MPa (0 is right); the consistent scheme ends at 0 ... 0.1 kPa.
+json column_14_percent(double end, double interval, bool consistent) {
+  json s = scene_a2("linear-elastic", 2.2e9, 1.0e-2, end, interval, 0.0, consistent ? Scheme::consistent : Scheme::seed);
+  s["materials"][0]["youngs_modulus"] = 2.0e6;
+  s["bodies"][0]["initial"]["pore_pressure"] = 3.0e5;
+  s["loads"][0]["value"] = {0.0, -3.0e5};
+  s["time"] = {{"end", end}};
+  if (consistent) s["solver"] = {{"continuity", "conservative"}, {"stabilisation", {{"pressure", "cell-constant"}}}};
+  else s.erase("solver");
+  return s;
+}
+
+// The defaults stop on the pore-pressure bound (p < -2 max(100 kPa, q) = -600 kPa for 100 steps in a
+// row), exit 3, with the particle, the value, the time and the remedy on stderr and in run.json.
+TEST(LargeStrainConsolidation, DefaultsAt14PercentStrainStopNamingTheRemedy) {
+  namespace fs = std::filesystem;
+  const fs::path dir = swmpm::testing::scratch("a2-14-percent-defaults");
+  std::ofstream(dir / "scene.json") << column_14_percent(2.0, 0.01, false).dump(2);
+  const auto r = swmpm::testing::swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + (dir / "run").string() + " -q", dir);
+  const std::string remedy = R"("solver": {"continuity": "conservative", "stabilisation": {"pressure": "cell-constant"}})";
+  std::printf("14 %% strain, defaults: exit %d, stderr: %s", r.status, r.err.c_str());
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find(remedy), std::string::npos) << r.err;
+  const auto rj = swmpm::testing::load_json((dir / "run" / "run.json").string());
+  EXPECT_EQ(rj["status"], "diverged");
+  const std::string diagnosis = rj.value("diagnosis", "");
+  for (const char* part : {"solid particle ", "(body \"column\") has pore pressure -", "below -600000 Pa", "steps in a row",
+                           "in the step from t = ", "no desaturation"})
+    EXPECT_NE(diagnosis.find(part), std::string::npos) << part << " in: " << diagnosis;
+  EXPECT_NE(diagnosis.find(remedy), std::string::npos) << diagnosis;
+  const double t_stop = rj["end_time"].get<double>();
+  EXPECT_LT(t_stop, 0.3);  // measured 2026-12-05: t = 0.0099 s (-881 kPa at y = 0.90 m, 100 steps beyond the bound); 0.2 s wall
+  // The last frame is the loop's last snapshot (solver.checkpoint_every), which may lie within the
+  // 100 steps the suction had to persist.
+  EXPECT_LE(rj["last_good_frame_time"].get<double>(), t_stop);
+  EXPECT_GT(rj["last_good_frame_time"].get<double>(), 0.0);
+}
+
+// The same column with "solver": {"continuity": "conservative", "stabilisation": {"pressure":
+// "cell-constant"}} completes and settles to the closed form, the pore pressure gone.
+TEST(LargeStrainConsolidation, ConsistentSchemeAt14PercentStrainSettlesToTheClosedForm) {
+  const std::string run = swmpm::testing::run_scene(column_14_percent(1.5, 0.5, true), "a2-14-percent-consistent");
+  const double S_inf = H * (1.0 - std::exp(-3.0e5 / 2.0e6));  // 0.139292 m
+  const double S = final_settlement(run);
+  const auto f = swmpm::testing::last_frame(run);
+  const auto& p = f.get("pore_pressure", "last frame").values;
+  const auto [lo, hi] = std::minmax_element(p.begin(), p.end());
+  std::printf("14 %% strain, consistent scheme: settlement %.5f m vs %.5f m (%+.2f %%), p in [%.1f, %.1f] Pa\n", S, S_inf,
+              100.0 * (S / S_inf - 1.0), *lo, *hi);
+  EXPECT_NEAR(S / S_inf, 1.0, 0.01);  // measured 2026-12-05: 0.14003 m, +0.53 %; p in [1.2, 16] Pa; 6.5 s wall
+  EXPECT_GT(*lo, -0.01 * 3.0e5);
+  EXPECT_LT(*hi, 0.01 * 3.0e5);
 }
 
 // The paper's parameters (K_f = 2.2 GPa, k = 1e-4 m/s, dt = 1e-5 s, 300 s: 3e7 steps, 40-55 min
