@@ -269,7 +269,7 @@ const Table& body_table() {
           {.name = "solid", .type = Type::string,
            .meaning = "Name of a solid material (the skeleton)."},
           {.name = "fluid", .type = Type::string,
-           .meaning = "Name of a `fluid` material (pore fluid, or free fluid without `solid`)."},
+           .meaning = "Name of a `fluid` material (pore fluid, or free fluid without `solid`: `explicit-double-point` and `mpm-fem` only)."},
           {.name = "particles_per_cell", .type = Type::integer, .def = 2, .range = closed(1, 32),
            .meaning = "Particles per cell and direction (n^dimension per cell)."},
           {.name = "initial", .type = Type::object,
