@@ -311,7 +311,7 @@ int main(int argc, char** argv) {
   post->add_option("run_dir", run_dir, "Run directory")->required();
   add_postprocess_commands(post, post_args, quiet);
 
-  auto* run = app.add_subcommand("run", "preprocess + solve + postprocess plot in one go");
+  auto* run = app.add_subcommand("run", "preprocess + solve + postprocess plot and report in one go");
   run->add_option("scene", scene_path, "Scene file (JSON)")->required();
   run->add_option("-o,--output", out_dir, "Run directory (default runs/<scene name>)");
   run->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::NonNegativeNumber);
@@ -360,7 +360,11 @@ int main(int argc, char** argv) {
       const std::string dir = swmpm::pre::preprocess(scene_path, out_dir, pre_opt);
       const int rc = swmpm::solve(dir, {threads, quiet, false, pre_opt.max_memory});
       if (rc != 0) return rc;
-      return postprocess_command(dir, {}, quiet);
+      // The plots of every monitor, then RUN_DIR/report.md (setup, cost, the plots).
+      if (const int plotted = postprocess_command(dir, {}, quiet); plotted != 0) return plotted;
+      PostArgs report;
+      report.command = "report";
+      return postprocess_command(dir, report, quiet);
     }
     if (*element) return element_command(swmpm::scene::load_scene(scene_path), el, quiet);
   } catch (const swmpm::scene::SceneError& e) {

@@ -339,3 +339,20 @@ TEST(BadInput, SwitchesNoMaterialOrFormulationReads) {
   ns["solver"]["kinematics"] = "small-strain";
   expect_rejected(ns, "nor-sand-small-strain", "/solver/kinematics", "is nor-sand, a finite-strain model");
 }
+
+// The README's main job: `swmpm run` leaves frames, monitors, plots of every monitor and report.md.
+TEST(RunCommand, LeavesFramesMonitorsPlotsAndAReport) {
+  json s = good_scene();
+  s["time"]["end"] = 0.05;
+  const fs::path dir = swmpm::testing::scratch("run-report");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const fs::path run = dir / "run";
+  const Result r = swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + run.string(), dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_GE(swmpm::scene::read_pvd((run / "output" / "results.pvd").string()).size(), 2u);
+  EXPECT_TRUE(fs::exists(run / "monitors.csv"));
+  for (const char* png : {"top.png", "base.png", "energy.png"}) EXPECT_TRUE(fs::exists(run / "plots" / png)) << png;
+  const std::string report = swmpm::testing::read_text((run / "report.md").string());
+  EXPECT_NE(report.find("# Run report: elastic-column"), std::string::npos) << report.substr(0, 200);
+  EXPECT_NE(r.out.find("report: " + (run / "report.md").string()), std::string::npos) << r.out;
+}
