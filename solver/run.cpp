@@ -368,6 +368,9 @@ class Runner {
                             static_cast<double>(state_.solid.size() + state_.fluid.size()),
                             scene::memory_limit(opt_.max_memory));
     f_ = factory_ ? factory_(scene_, state_) : make_formulation<Dim>(scene_, state_);
+    // The initial state's critical step, once: the interval check, the estimate and the log read it.
+    dt_crit0_ = f_->critical_time_step(state_, dt_reason_);
+    dt0_ = scene_.time.dt ? *scene_.time.dt : scene_.time.cfl * dt_crit0_;
     refuse_intervals_below_the_step();
     if (!opt_.resume) estimate_cost();
     reporters_ = make_materials<Dim>(scene_);  // frames' material state fields (pure functions of the particles)
@@ -398,8 +401,7 @@ class Runner {
   /// An output interval below the time step would write every step (and one of 1e-20 s made the
   /// loop spin): refused with the key, the value and the step, before anything is written (exit 2).
   void refuse_intervals_below_the_step() const {
-    std::string reason;
-    const double dt = scene_.time.dt ? *scene_.time.dt : scene_.time.cfl * f_->critical_time_step(state_, reason);
+    const double dt = dt0_;
     std::vector<std::string> problems;
     auto check = [&](const char* path, double interval, const char* zero) {
       if (interval > 0.0 && interval < dt)
@@ -418,13 +420,11 @@ class Runner {
   /// year of wall time, more output than the disk's free space) refused before anything is written
   /// (exit 2); past a soft one a warning in the log (scene/budget.hpp).
   void estimate_cost() {
-    std::string reason;
-    const double dt = scene_.time.dt ? *scene_.time.dt : scene_.time.cfl * f_->critical_time_step(state_, reason);
-    estimate_ = scene::estimate_run(scene_, static_cast<double>(state_.solid.size() + state_.fluid.size()), dt,
+    estimate_ = scene::estimate_run(scene_, static_cast<double>(state_.solid.size() + state_.fluid.size()), dt0_,
                                     clock_.t_start);
     std::error_code ec;
     const auto space = fs::space(dir_, ec);
-    estimate_warnings_ = scene::check_run_estimate(scene_, (dir_ / "scene.json").string(), estimate_, dt, reason,
+    estimate_warnings_ = scene::check_run_estimate(scene_, (dir_ / "scene.json").string(), estimate_, dt0_, dt_reason_,
                                                    ec ? 0.0 : static_cast<double>(space.available));
   }
 
@@ -471,7 +471,7 @@ class Runner {
               (state_.fluid.size() ? ", " + std::to_string(state_.fluid.size()) + " water points" : std::string()) +
               ", " + std::to_string(threads_) + " threads");
     for (const auto& l : monitors_->describe(state_)) log_.line(l);
-    const double dt_crit = f_->critical_time_step(state_, dt_reason_);
+    const double dt_crit = dt_crit0_;
     if (clock_.auto_dt) {
       log_.line("dt auto: " + fmt(scene_.time.cfl * dt_crit) + " s = cfl " + fmt(scene_.time.cfl) + " x " +
                 fmt(dt_crit) + " s, limited by " + dt_reason_);
@@ -1019,6 +1019,7 @@ class Runner {
   int threads_now_ = 1, threads_fewest_ = 1, raise_votes_ = 0;
   bool threads_checked_ = false;
   std::chrono::steady_clock::time_point last_load_check_ = std::chrono::steady_clock::now();
+  double dt_crit0_ = 0.0, dt0_ = 0.0;           // s, the initial state's critical and first step
   scene::RunEstimate estimate_;                // a fresh run's cost, from its first step
   std::vector<std::string> estimate_warnings_;  // soft limits passed
   scene::Scene scene_;

@@ -25,6 +25,18 @@ using swmpm::testing::swmpm_cmd;
 
 json column_scene() { return swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/elastic-column/scene.json"); }
 
+/// The column's scene in 3D with its body a surface mesh read from `file`.
+json surface_mesh_scene(const std::string& file, double cell_size, const json& max) {
+  json s = column_scene();
+  s["dimension"] = 3;
+  s["grid"] = {{"cell_size", cell_size}, {"min", {0, 0, 0}}, {"max", max}, {"shape_function", "gimp"}};
+  s["gravity"] = {0.0, -9.81, 0.0};
+  s["bodies"][0]["geometry"] = {{"type", "surface-mesh"}, {"file", file}};
+  s["boundaries"] = json::array();
+  s["output"]["monitors"] = json::array();
+  return s;
+}
+
 void write(const fs::path& file, const std::string& text) { std::ofstream(file, std::ios::binary) << text; }
 
 struct Probe {
@@ -123,13 +135,7 @@ TEST(ResourceLimits, AMeshFileDeclaringMoreThanItHoldsIsRefused) {
 
 // An .off surface whose header declares 1e9 vertices in a few bytes.
 TEST(ResourceLimits, ASurfaceFileDeclaringMoreThanItHoldsIsRefused) {
-  json s = column_scene();
-  s["dimension"] = 3;
-  s["grid"] = {{"cell_size", 0.05}, {"min", {0, 0, 0}}, {"max", {0.1, 1.1, 0.1}}, {"shape_function", "gimp"}};
-  s["gravity"] = {0.0, -9.81, 0.0};
-  s["bodies"][0]["geometry"] = {{"type", "surface-mesh"}, {"file", "huge.off"}};
-  s["boundaries"] = json::array();
-  s["output"]["monitors"] = json::array();
+  const json s = surface_mesh_scene("huge.off", 0.05, {0.1, 1.1, 0.1});
   const Probe p = preprocess("off", s, "", {{"huge.off", "OFF\n1000000000 1000000000 0\n0 0 0\n"}});
   EXPECT_EQ(p.r.status, 2) << p.r.err;
   EXPECT_NE(p.r.err.find("/bodies/0/geometry/file"), std::string::npos) << p.r.err;
@@ -140,13 +146,7 @@ TEST(ResourceLimits, ASurfaceFileDeclaringMoreThanItHoldsIsRefused) {
 // Found by FuzzSlow: sphere.off with one face of "1e12" corners. CGAL reserved them:
 // std::bad_alloc, exit 1, no path.
 TEST(ResourceLimits, ASurfaceFaceWithAbsurdCornersIsRefused) {
-  json s = column_scene();
-  s["dimension"] = 3;
-  s["grid"] = {{"cell_size", 0.1}, {"min", {0, 0, 0}}, {"max", {1, 1, 1}}, {"shape_function", "gimp"}};
-  s["gravity"] = {0.0, -9.81, 0.0};
-  s["bodies"][0]["geometry"] = {{"type", "surface-mesh"}, {"file", "sphere.off"}};
-  s["boundaries"] = json::array();
-  s["output"]["monitors"] = json::array();
+  const json s = surface_mesh_scene("sphere.off", 0.1, {1, 1, 1});
   std::string off = swmpm::testing::read_text(SWMPM_SOURCE_DIR "/geometries/sphere.off");
   const std::size_t face = off.find("\n3 ", off.find("\n3 ") + 1);  // the second face line
   off.replace(face + 1, 1, "1e12");
