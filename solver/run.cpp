@@ -28,6 +28,7 @@
 #include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 #include "solver/cpu_load.hpp"
+#include "solver/diagnostics/stability.hpp"
 #include "solver/formulation.hpp"
 #include "solver/formulations/registry.hpp"
 #include "solver/materials/material.hpp"
@@ -58,6 +59,13 @@ class Log {
   }
   void line(const std::string& s) {
     if (!quiet_) std::cout << s << std::endl;
+    to_file(s);
+  }
+  /// A line for log.txt only (the per-frame stability indicators: the terminal shows warnings).
+  void file_line(const std::string& s) { to_file(s); }
+  /// A warning: log.txt, and stderr unless quiet.
+  void warning(const std::string& s) {
+    if (!quiet_) std::cerr << s << std::endl;
     to_file(s);
   }
   /// A failure (diverged, interrupted, a failed write): one line on stderr even when quiet
@@ -495,11 +503,11 @@ class Runner {
     begin_initialisation();
     take_snapshot(last_good_);  // the initial state is the first good one
     last_good_time_ = clock_.t_start;
+    guard_.start(*f_, state_, StepContext{0.0, 0.0, gravity_at(clock_.t_start)});  // before frame 0's indicators
     write_frame(clock_.t_start);
     next_frame_ = scene_.output.interval > 0 ? clock_.t_start + scene_.output.interval : clock_.end;
     monitors_->record(state_, *f_, guard_.work);
     next_monitor_ = clock_.t_start + scene_.output.monitor_interval;
-    guard_.start(*f_, state_, StepContext{0.0, 0.0, gravity_at(clock_.t_start)});
     next_restart_ = clock_.t_start + restart_interval();
     first_step_ = state_.step;
   }
@@ -651,11 +659,14 @@ class Runner {
 
   /// One frame: a VTU per particle set, the formulation's grid fields (Formulation::grid_fields,
   /// unless `grid` is false), then results.pvd, which lists a frame only once all of its files are
-  /// complete (each is written atomically; a failure throws files::WriteError).
+  /// complete (each is written atomically; a failure throws files::WriteError). Then the frame's
+  /// stability indicators (not for the last good state of a diverged run, `grid` false: its
+  /// energies and grid fields are gone).
   void write_frame(double t, bool grid = true) {
     const auto start = std::chrono::steady_clock::now();
     const int k = frame_count_++;
     const std::size_t listed = frames_.size();
+    GridFields nodes;
     // The file of a group in this frame, claimed on the ledger and listed (the listing is undone
     // if a write fails).
     auto file = [&](const char* group, int part) {
@@ -675,7 +686,7 @@ class Runner {
       scene::write_vtu(file("solid", 0), solid, compression_);
       if (state_.fluid.size()) scene::write_vtu(file("fluid", 1), fluid, compression_);
       if (grid) {
-        const GridFields nodes = f_->grid_fields(state_);
+        nodes = f_->grid_fields(state_);
         if (!nodes.empty()) scene::write_lattice_vtu(file("grid", 2), nodes.cloud, nodes.nodes, compression_);
       }
       run_dir_.claim("output/results.pvd");
@@ -685,6 +696,22 @@ class Runner {
       throw;
     }
     frame_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (grid) record_stability(nodes);
+  }
+
+  /// The frame's stability indicators (solver/diagnostics/stability.hpp): a line in log.txt, a
+  /// warning (log.txt and stderr) at an indicator's first crossing of its threshold, and the
+  /// history run.json gets. Timed apart from the frame's files (run.json stability.seconds).
+  void record_stability(const GridFields& nodes) {
+    const auto start = std::chrono::steady_clock::now();
+    const diagnostics::Energies e{f_->kinetic_energy(state_), f_->strain_energy(state_), guard_.energy0, guard_.work};
+    const diagnostics::FrameIndicators fi = diagnostics::measure<Dim>(
+        state_, nodes.empty() ? nullptr : &nodes, e, gravity_at(state_.time), state_.time - clock_.t_start);
+    const std::vector<std::string> warnings = stability_.add(fi);
+    stability_.add_seconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    log_.file_line(diagnostics::StabilityReport::frame_line(fi));
+    if (!warnings.empty() && tty_) std::fprintf(stderr, "\r%*s\r", 90, "");
+    for (const auto& w : warnings) log_.warning(w);
   }
 
   // ---- checkpoints: the in-memory last-good state and the restart file ----------------------
@@ -728,6 +755,7 @@ class Runner {
     loop["frame_count"] = frame_count_;
     loop["frames"] = frames;
     loop["monitor_bytes"] = monitors_->bytes();
+    loop["stability"] = stability_.json();
     c.header["loop"] = loop;
     run_dir_.claim("checkpoint.bin");
     c.write(dir_ / "checkpoint.bin");
@@ -783,6 +811,7 @@ class Runner {
     guard_.restore(l);
     next_frame_ = l.at("next_frame"), next_monitor_ = l.at("next_monitor"), next_restart_ = l.at("next_restart");
     frame_count_ = l.at("frame_count");
+    if (l.contains("stability")) stability_.restore(l.at("stability"));
     frames_.clear();
     for (const auto& e : l.at("frames"))
       frames_.push_back({e.at(0).get<double>(), e.at(1).get<std::string>(), e.at(2).get<int>(), e.at(3).get<std::string>()});
@@ -968,6 +997,7 @@ class Runner {
       for (const auto& c : counters) cj[c.name] = c.value;
       rj["counters"] = cj;
     }
+    rj["stability"] = stability_.json();
     rj["software_version"] = version;
     rj["git_hash"] = git_hash;
     write_run_report(rj.dump(2) + "\n");
@@ -992,6 +1022,12 @@ class Runner {
         split << " " << st.names[k] << " " << fmt(100.0 * st.seconds[k] / std::max(total, 1e-300), 3) << "%";
       log_.line(split.str());
       for (const auto& c : counters) log_.line(c.name + ": " + fmt(c.value, 6) + (c.unit.empty() ? "" : " " + c.unit));
+      const auto stability = stability_.summary();
+      for (std::size_t k = 0; k < stability.size(); ++k) {
+        if (k == 0) log_.line(stability[k] + "; measuring them took " + fmt(stability_.seconds(), 3) + " s (" +
+                              fmt(100.0 * stability_.seconds() / std::max(loop_wall, 1e-300), 3) + "% of the time loop)");
+        else log_.warning(stability[k]);
+      }
     } catch (const files::WriteError& e) {  // log.txt; run.json is already written
       log_.failure(e.what());
     }
@@ -1041,6 +1077,7 @@ class Runner {
   int frame_count_ = 0;
   Checkpoint last_good_;  // the in-memory last-good snapshot (solver.checkpoint_every)
   double last_good_time_ = 0.0;
+  diagnostics::StabilityReport stability_;  // the indicators of every frame so far
 
   // The run's outcome and timings.
   std::string status_ = "completed", diagnosis_;
