@@ -196,7 +196,16 @@ FrameIndicators measure(const State<Dim>& s, const GridFields* grid, const Energ
         p.push_back(grid_p->values[i]);
         node.push_back(static_cast<long>(i));
       }
-    const double h = grid->cloud.size() > 1 ? std::abs(grid->cloud.points[1][0] - grid->cloud.points[0][0]) : 1.0;
+    // The node spacing: the median gap along the first row (B-spline lattices put a node at h/2
+    // from the boundary's, so the first gap is not the spacing).
+    std::vector<double> gaps;
+    for (int i = 0; i + 1 < grid->nodes[0] && static_cast<std::size_t>(i + 1) < grid->cloud.size(); ++i)
+      gaps.push_back(std::abs(grid->cloud.points[i + 1][0] - grid->cloud.points[i][0]));
+    double h = 1.0;
+    if (!gaps.empty()) {
+      std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
+      h = gaps[gaps.size() / 2];
+    }
     auto place = [&](long k) { return k < 0 ? Place{} : Place{"grid", node[k], x[k], Dim}; };
     if (!x.empty()) {
       const Neighbourhood nb(x, Dim, kRadiusInSpacings * h);

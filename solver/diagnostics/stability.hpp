@@ -43,7 +43,7 @@ inline constexpr std::array<IndicatorSpec, kIndicators> kSpecs{{
     {"pressure_checkerboard", "pressure checkerboard index", 0.1, true},
     {"mean_stress_checkerboard", "mean-stress checkerboard index", 0.1, true},
     {"energy_error", "energy balance error", 0.05, true},
-    {"spurious_velocity", "spurious velocity at rest (over the velocity scale)", 0.1, true},
+    {"spurious_velocity", "spurious velocity at rest (over the velocity scale)", 0.25, true},
     {"porosity_min", "smallest porosity", 0.02, false},
     {"porosity_max", "largest porosity", 0.95, true},
     {"J_min", "smallest J = V/V0", 0.5, false},

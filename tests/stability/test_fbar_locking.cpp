@@ -2,9 +2,11 @@
 // under a strip load, undamped (the dynamic response is not relaxed away), with the most
 // locking-prone shape functions (linear hats; GIMP) — elastic (hencky) and undrained-like
 // Tresca plasticity (mohr-coulomb with φ = ψ = 0: isochoric plastic flow). Indicator: the
-// checkerboard indicator of the mean stress on the last frame (support/indicators.hpp). Without
-// F-bar the mean stress forms a checkerboard; with the modified F-bar (cell-wise patches, the
-// default for these shape functions) it stays smooth.
+// checkerboard index of the mean stress on the last frame, as the run reports it (run.json
+// stability.frames.mean_stress_checkerboard, solver/diagnostics: radius 1.6 point spacings =
+// 0.2 m), so the suite and the user see the same number; the run's own warning is checked too.
+// Without F-bar the mean stress forms a checkerboard; with the modified F-bar (cell-wise patches,
+// the default for these shape functions) it stays smooth.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -16,7 +18,8 @@ namespace {
 
 struct LockingRun {
   int status = -1;
-  double checkerboard = 0.0;
+  double checkerboard = 0.0;  // the run's own index at its last frame (run.json)
+  int warnings = 0;           // the run's stability warnings
   double p_max = 0.0;       // Pa, largest mean stress of the last frame
   double settlement = 0.0;  // m, under the load's centre
 };
@@ -48,7 +51,11 @@ LockingRun run_layer(const std::string& shape, const std::string& model, const s
   const auto f = swmpm::testing::last_frame(run);
   const auto& p = f.get("mean_effective_stress", name).values;
   for (double v : p) r.p_max = std::max(r.p_max, v);
-  r.checkerboard = swmpm::testing::checkerboard_indicator(f, p, 1.6 * 0.125);
+  const auto st = swmpm::testing::load_json(run + "/run.json")["stability"];
+  r.checkerboard = st["frames"]["mean_stress_checkerboard"].back().get<double>();
+  r.warnings = static_cast<int>(st["warnings"].size());
+  // The library's index on the frame the run wrote: the same number.
+  EXPECT_NEAR(r.checkerboard, swmpm::testing::checkerboard_indicator(f, p, 1.6 * 0.125), 1e-12);
   r.settlement = -swmpm::post::read_csv(run + "/monitors.csv").column("centre.displacement_y").back();
   std::printf("locking %s %s fbar %s: status %d, checkerboard %.4f, p_max %.0f Pa, settlement %.3f mm\n",
               shape.c_str(), model.c_str(), fbar.c_str(), r.status, r.checkerboard, r.p_max, 1e3 * r.settlement);
@@ -73,6 +80,10 @@ TEST(Stability, NearlyIncompressibleLayerChecksBoardsWithoutFBarAndNotWithIt) {
       EXPECT_LT(standard.checkerboard, 0.01);
       EXPECT_LT(modified.checkerboard, 0.03);
       EXPECT_GT(none.checkerboard, 5.0 * modified.checkerboard);
+      // The run itself warns without F-bar (index above its threshold 0.1), not with it.
+      EXPECT_EQ(none.warnings, 1);
+      EXPECT_EQ(standard.warnings, 0);
+      EXPECT_EQ(modified.warnings, 0);
       // The checkerboard's peaks: spurious mean stresses well above the 30 kPa load without F-bar.
       EXPECT_GT(none.p_max, 1.4 * 3.0e4);
       EXPECT_LT(modified.p_max, 1.0 * 3.0e4);

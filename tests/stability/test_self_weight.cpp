@@ -2,7 +2,9 @@
 // ramp with FLIP 0.99. Stabilised with the linear multi-field variational basis and strain
 // smoothing the pore pressure stays bounded and smooth; with no stabilisation it breaks up.
 // Indicators: the largest pore pressure over the run against the undrained scale rho_sat g H, and
-// the checkerboard indicator of the final pore-pressure field (support/indicators.hpp). Without
+// the checkerboard index of the final pore-pressure field as the run reports it (run.json
+// stability, solver/diagnostics: radius 1.6 point spacings = 0.1 m; support/indicators.hpp for
+// the cell averages). Without
 // stabilisation the run is now stopped by explicit-single-point's pore-pressure bound (issue 27,
 // item 7): it holds p below -2 max(100 kPa, rho_sat g H) = -200 kPa from t = 0.06 s on (down to
 // -2.5 MPa; measured 2026-12-05), where before it ran on to 0.4 s with max P1 > 2 rho_sat g H and a
@@ -19,7 +21,7 @@ using nlohmann::json;
 struct Outcome {
   double max_p1;        // Pa, largest pore pressure at P1 over the run
   double p1_ramp_end;   // Pa, at t = 0.1 s
-  double checkerboard;  // final frame
+  double checkerboard;  // final frame, the run's own (run.json stability.frames.pressure_checkerboard)
   double cell_checkerboard;  // final frame, on cell averages (support/indicators.hpp)
 };
 
@@ -29,13 +31,14 @@ Outcome run_a5(const std::string& pressure, bool smoothing, double end, const st
   s["solver"]["stabilisation"] = {{"pressure", pressure}, {"strain_smoothing", smoothing}};
   if (!continuity.empty()) s["solver"]["continuity"] = continuity;
   s["time"]["end"] = end;
-  s["output"]["interval"] = end;
+  s["output"]["interval"] = stop ? 0.01 : end;  // a run expected to stop: frames (and indicators) every 0.01 s
   int rc = 0;
   const std::string run = swmpm::testing::run_scene(s, name, 0, stop ? &rc : nullptr);
   if (stop) {
     const auto rj = swmpm::testing::load_json(run + "/run.json");
     *stop = std::to_string(rc) + " " + rj["status"].get<std::string>() + " at t = " +
             std::to_string(rj["end_time"].get<double>()) + ": " + rj.value("diagnosis", "");
+    for (const auto& w : rj["stability"]["warnings"]) *stop += " | " + w.get<std::string>();
     std::printf("A5 %s: exit %s\n", pressure.c_str(), stop->c_str());
     return {};
   }
@@ -49,7 +52,10 @@ Outcome run_a5(const std::string& pressure, bool smoothing, double end, const st
   }
   const auto f = swmpm::testing::last_frame(run);
   const auto& p = f.get("pore_pressure", "frame").values;
-  o.checkerboard = swmpm::testing::checkerboard_indicator(f, p, 0.1);
+  const auto st = swmpm::testing::load_json(run + "/run.json")["stability"];
+  o.checkerboard = st["frames"]["pressure_checkerboard"].back().get<double>();
+  EXPECT_NEAR(o.checkerboard, swmpm::testing::checkerboard_indicator(f, p, 0.1), 1e-12);  // the library's, on the frame
+  EXPECT_TRUE(st["warnings"].empty()) << st["warnings"].dump();
   o.cell_checkerboard = swmpm::testing::cell_checkerboard_indicator(
       f, p, s["grid"]["cell_size"].get<double>(), s["grid"]["min"][0].get<double>(), s["grid"]["min"][1].get<double>());
   std::printf("A5 %s, smoothing %d, to %.2f s: max P1 %.0f Pa, P1(0.1 s) %.0f Pa, checkerboard %.4f (cells %.4f)\n",
@@ -69,6 +75,12 @@ TEST(Stability, SelfWeightConsolidationStabilisedStaysBoundedAndSmooth) {
   run_a5("none", false, 0.4, "a5-off", "", &stop);
   EXPECT_EQ(stop.rfind("3 diverged", 0), 0u) << stop;
   EXPECT_NE(stop.find("below -200000 Pa"), std::string::npos) << stop;
+  // Before the bound stops it at 0.06 s, the run's own indicators warned (measured: the pressure
+  // checkerboard 0.23 at the first frame, 0.01 s; the mean stress's 0.21 at 0.02 s; 12 % of the
+  // points below -100 kPa at 0.05 s).
+  EXPECT_NE(stop.find("warning: stability: pressure checkerboard index 0.2"), std::string::npos) << stop;
+  EXPECT_NE(stop.find("warning: stability: fraction of water points below the cavitation bound"), std::string::npos)
+      << stop;
 }
 
 // The cell-constant pressure with the conservative continuity on the same hard case: one pressure
