@@ -93,6 +93,13 @@ void expect_identical(const Pair& p, const std::string& name) {
   EXPECT_TRUE(read_text((p.whole / "monitors.csv").string()) == read_text((p.resumed / "monitors.csv").string()))
       << name << ": monitors.csv differs";
   EXPECT_EQ(p.resumed_run["steps"], swmpm::testing::load_json((p.whole / "run.json").string())["steps"]) << name;
+  // The stability indicators' record (run.json) too: the checkpoint carries it on.
+  const json whole_stability = swmpm::testing::load_json((p.whole / "run.json").string())["stability"];
+  EXPECT_EQ(p.resumed_run["stability"]["frames"].dump(), whole_stability["frames"].dump()) << name;
+  EXPECT_EQ(p.resumed_run["stability"]["worst"].dump(), whole_stability["worst"].dump()) << name;
+  std::size_t solid_frames = 0;
+  for (const auto& e : fs::directory_iterator(p.whole / "output")) solid_frames += e.path().filename().string().rfind("solid_", 0) == 0;
+  EXPECT_EQ(p.resumed_run["stability"]["frames"]["time"].size(), solid_frames) << name << ": one entry per frame";
   EXPECT_NE(read_text((p.resumed / "log.txt").string()).find("resumed from the checkpoint at step"), std::string::npos);
 }
 

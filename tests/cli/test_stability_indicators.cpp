@@ -93,6 +93,10 @@ TEST(StabilityIndicators, TerzaghiReportsEveryIndicatorBelowItsThreshold) {
   EXPECT_NE(log.find("stability at t = 0.05 s: p checkerboard "), std::string::npos) << log;
   EXPECT_NE(log.find("stability over 6 frames (worst values): pressure_checkerboard "), std::string::npos) << log;
   EXPECT_EQ(log.find("warning: stability"), std::string::npos) << log;
+  // Two threads: the same history, bit for bit (and the same places).
+  const json st2 = stability_of(swmpm::testing::run_scene(s, "stab-terzaghi-2", 2));
+  EXPECT_EQ(st2["frames"].dump(), st["frames"].dump());
+  EXPECT_EQ(st2["worst"].dump(), st["worst"].dump());
 }
 
 // A dry run has no pore pressure and no porosity: those indicators are omitted with the reason.
