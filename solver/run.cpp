@@ -1017,7 +1017,7 @@ class Runner {
       // the loop that is, and the frames' share (the rest: monitors, energy checks, time-step control).
       split << "stages (" << fmt(100.0 * total / std::max(loop_wall, 1e-300), 3) << "% of the time loop, " << frames
             << " frames " << fmt(100.0 * frame_seconds_ / std::max(loop_wall, 1e-300), 3)
-            << "%; the rest writes monitors and checks energy):";
+            << "%; the rest writes monitors, checks energy and takes the stability indicators):";
       for (std::size_t k = 0; k < st.names.size(); ++k)
         split << " " << st.names[k] << " " << fmt(100.0 * st.seconds[k] / std::max(total, 1e-300), 3) << "%";
       log_.line(split.str());

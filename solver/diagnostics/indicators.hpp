@@ -30,9 +30,11 @@ inline constexpr double kRadiusInSpacings = 1.6;
 inline constexpr int kMinNeighbours2D = 6;
 inline constexpr int kMinNeighbours3D = 14;
 /// The checkerboard index divides by max(range, relative floor x max |value|, absolute floor):
-/// a nearly uniform field (round-off only) is not judged as rough.
+/// a nearly uniform field (round-off only) is not judged as rough. The runs' fields are pressures
+/// and stresses, with the absolute floor 1 Pa; a field of another unit (the tests' porosity)
+/// passes its own (0 by default).
 inline constexpr double kRangeRelativeFloor = 0.01;
-inline constexpr double kRangeAbsoluteFloor = 1.0;  // in the field's unit (Pa for p and p')
+inline constexpr double kStressFloor = 1.0;  // Pa
 /// "At rest": a point whose displacement since t = 0 and whose every neighbour's displacement are
 /// at most this fraction of the largest displacement of its set. 5 %: under self-weight a
 /// column's displacement grows as 2y/H near its fixed base, so with 4 points per 0.05 m cell in a
@@ -95,8 +97,8 @@ class Neighbourhood {
 /// Checkerboard index of a scalar field on points: each point with enough neighbours (above) is
 /// compared with the least-squares plane a + b.(x_q - x_p) through its neighbours' values; the
 /// index is the RMS of those residuals divided by the field's scale, max(max - min,
-/// kRangeRelativeFloor max|v|, kRangeAbsoluteFloor). A smooth field gives ~0 (only curvature
-/// remains), a checkerboard of amplitude A on a field of range R about A/R.
+/// kRangeRelativeFloor max|v|, absolute_floor). A smooth field gives ~0 (only curvature remains),
+/// a checkerboard of amplitude A on a field of range R A/R (2D; 2A/(3R) on a 3D lattice).
 struct Checkerboard {
   double index = 0.0;     // -, rms / scale
   double rms = 0.0;       // the field's unit
@@ -105,8 +107,7 @@ struct Checkerboard {
   long worst = -1;        // the point with the largest |residual| (-1: none fitted)
   double worst_residual = 0.0;
 };
-Checkerboard checkerboard(const Neighbourhood& nb, std::span<const double> value,
-                          double absolute_floor = kRangeAbsoluteFloor);
+Checkerboard checkerboard(const Neighbourhood& nb, std::span<const double> value, double absolute_floor = 0.0);
 
 /// The largest speed among the points at rest (kAtRestFraction above). No point is at rest
 /// before anything has moved (largest displacement 0).

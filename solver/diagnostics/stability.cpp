@@ -91,7 +91,7 @@ void add_motion(const SetView<Dim>& v, double elapsed, Motion& m) {
 
 template <int Dim>
 void set_checkerboard(FrameIndicators& f, Indicator k, const SetView<Dim>& v, std::span<const double> value) {
-  const Checkerboard c = checkerboard(v.nb, value);
+  const Checkerboard c = checkerboard(v.nb, value, kStressFloor);
   f.value[k] = c.index;
   f.where[k] = v.place(c.worst);
 }
@@ -209,7 +209,7 @@ FrameIndicators measure(const State<Dim>& s, const GridFields* grid, const Energ
     auto place = [&](long k) { return k < 0 ? Place{} : Place{"grid", node[k], x[k], Dim}; };
     if (!x.empty()) {
       const Neighbourhood nb(x, Dim, kRadiusInSpacings * h);
-      const Checkerboard c = checkerboard(nb, p);
+      const Checkerboard c = checkerboard(nb, p, kStressFloor);
       f.value[pressure_checkerboard] = c.index, f.where[pressure_checkerboard] = place(c.worst);
     }
     const Cavitation c = cavitation(p);
@@ -288,7 +288,7 @@ std::string StabilityReport::frame_line(const FrameIndicators& f) {
   if (f.omitted[porosity_min].empty()) os << ", porosity " << value(porosity_min) << " to " << value(porosity_max);
   if (f.omitted[J_min].empty()) os << ", J " << value(J_min) << " to " << value(J_max);
   if (f.omitted[cavitation_fraction].empty())
-    os << ", cavitation " << f.cavitating << " of " << f.water_points << " water points";
+    os << ", cavitation " << f.cavitating << " of " << f.water_points << " with water";
   return os.str();
 }
 

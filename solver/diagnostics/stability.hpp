@@ -48,7 +48,7 @@ inline constexpr std::array<IndicatorSpec, kIndicators> kSpecs{{
     {"porosity_max", "largest porosity", 0.95, true},
     {"J_min", "smallest J = V/V0", 0.5, false},
     {"J_max", "largest J = V/V0", 2.0, true},
-    {"cavitation_fraction", "fraction of water points below the cavitation bound (-100 kPa gauge)", 0.01, true},
+    {"cavitation_fraction", "cavitating fraction (points or nodes whose water is below -100 kPa gauge)", 0.01, true},
 }};
 inline bool crosses(Indicator k, double v) { return kSpecs[k].above ? v > kSpecs[k].threshold : v < kSpecs[k].threshold; }
 

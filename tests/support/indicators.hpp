@@ -16,9 +16,10 @@ namespace swmpm::testing {
 
 /// Checkerboard index of a scalar field on particles (2D; dim 3 for 3D points): the RMS deviation
 /// of each value from the least-squares plane through its neighbours within `radius`, divided by
-/// the field's range (diagnostics::checkerboard, with its floor on the range). A smooth field
-/// gives ~0 (only curvature remains); a checkerboard of amplitude A over a range R gives ~A/R.
-/// A run reports the same index with radius 1.6 x the points' typical spacing.
+/// the field's range (diagnostics::checkerboard, with its floor of 1 % of max |value| on the
+/// range). A smooth field gives ~0 (only curvature remains); a checkerboard of amplitude A over a
+/// range R gives ~A/R. A run reports the same index of its pressures and stresses (with radius
+/// 1.6 x the points' typical spacing, and a floor of 1 Pa, which fields of a few Pa never reach).
 inline double checkerboard_indicator(const scene::PointCloud& f, const std::vector<double>& value, double radius,
                                      int dim = 2) {
   if (f.size() == 0) return 0.0;
