@@ -19,13 +19,12 @@ std::string fmt(double v, int prec = 4) {
   return os.str();
 }
 
-/// A set's positions as 3-vectors, its neighbourhood (radius 1.6 typical spacings), and the place
+/// A set's neighbourhood (its positions as 3-vectors, radius 1.6 typical spacings), and the place
 /// of its point k.
 template <int Dim>
 struct SetView {
   const ParticleSet<Dim>& ps;
   const char* name;
-  std::vector<Point> x;
   Neighbourhood nb;
   static std::vector<Point> points(const ParticleSet<Dim>& ps) {
     std::vector<Point> x(ps.size(), Point{0, 0, 0});
@@ -38,19 +37,19 @@ struct SetView {
     return s > 0.0 ? kRadiusInSpacings * s : 1.0;
   }
   SetView(const ParticleSet<Dim>& set, const char* set_name)
-      : ps(set), name(set_name), x(points(set)), nb(x, Dim, radius(set)) {}
+      : ps(set), name(set_name), nb(points(set), Dim, radius(set)) {}
   Place place(long k) const {
     if (k < 0) return {};
-    return {name, static_cast<long>(ps.id[k]), x[k], Dim};
+    return {name, static_cast<long>(ps.id[k]), nb.x(static_cast<std::size_t>(k)), Dim};
   }
   /// The largest extent of the set's bounding box [m].
   double extent() const {
     double e = 0.0;
     for (int a = 0; a < Dim; ++a) {
       double lo = 0.0, hi = 0.0;
-      for (std::size_t p = 0; p < x.size(); ++p) {
-        lo = p ? std::min(lo, x[p][a]) : x[p][a];
-        hi = p ? std::max(hi, x[p][a]) : x[p][a];
+      for (std::size_t p = 0; p < nb.size(); ++p) {
+        lo = p ? std::min(lo, nb.x(p)[a]) : nb.x(p)[a];
+        hi = p ? std::max(hi, nb.x(p)[a]) : nb.x(p)[a];
       }
       e = std::max(e, hi - lo);
     }
@@ -70,7 +69,7 @@ struct Motion {
 
 template <int Dim>
 void add_motion(const SetView<Dim>& v, double elapsed, Motion& m) {
-  const std::size_t n = v.x.size();
+  const std::size_t n = v.nb.size();
   std::vector<double> u(n), speed(n);
   for (std::size_t p = 0; p < n; ++p) {
     u[p] = (v.ps.x[p] - v.ps.x0[p]).norm();
