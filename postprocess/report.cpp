@@ -202,8 +202,12 @@ std::string write_report(const std::string& run_dir, const std::vector<Reference
   };
   collect_fields();
   if (field_pngs.empty() && fs::exists(dir / "output" / "results.pvd")) {
-    const RunSeries series(run_dir, "solid");
-    plot_fields(run_dir, "displacement_magnitude", {series.frames().back().time});
+    // The soil's displacement at the last frame; a run of free water only (no soil points in its
+    // solid frames) shows its water points' speed instead.
+    const RunSeries solid(run_dir, "solid");
+    const double t_last = solid.frames().back().time;
+    if (solid.load(solid.nearest_frame(t_last)).size() > 0) plot_fields(run_dir, "displacement_magnitude", {t_last});
+    else plot_fields(run_dir, "velocity_magnitude", {t_last}, "fluid");
     collect_fields();
   }
 

@@ -356,3 +356,20 @@ TEST(RunCommand, LeavesFramesMonitorsPlotsAndAReport) {
   EXPECT_NE(report.find("# Run report: elastic-column"), std::string::npos) << report.substr(0, 200);
   EXPECT_NE(r.out.find("report: " + (run / "report.md").string()), std::string::npos) << r.out;
 }
+
+// A run of free water only (explicit-double-point, no soil body) has empty solid frames: its
+// report draws the water points' speed at the last frame (the report step used to fail, exit 1,
+// "the frames have neither half_size nor volume").
+TEST(RunCommand, FreeWaterOnlyRunEndsWithAReportOfTheWaterPoints) {
+  json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/dam-break-double-point/scene.json");
+  s["time"]["end"] = 0.01;
+  s["output"]["interval"] = 0.005;
+  const fs::path dir = swmpm::testing::scratch("run-report-free-water");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const fs::path run = dir / "run";
+  const Result r = swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + run.string() + " --threads 1", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(run / "plots" / "field_velocity_magnitude_0.01.png"));
+  const std::string report = swmpm::testing::read_text((run / "report.md").string());
+  EXPECT_NE(report.find("field `velocity_magnitude_0.01`"), std::string::npos) << report;
+}
