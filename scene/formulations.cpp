@@ -163,7 +163,7 @@ std::vector<FormulationRow> make_rows() {
                   .check = check_mpm_fem,
                   .material_keys = {"grain_diameter", "ergun_a", "ergun_b"},
                   // The air and the phase field of the grid's fluid.
-                  .keys = {"/solver/air", "/solver/phase_field", "/initialisation/materials"},
+                  .keys = {"/solver/air", "/solver/phase_field", "/solver/soil_substeps", "/initialisation/materials"},
                   .cost = {.bytes_per_point = 900.0, .bytes_per_node = 1500.0, .node_bytes_3d = 5.0, .us_per_point_step = 1.0, .us_per_node_step = 15.0}});
   return rows;
 }

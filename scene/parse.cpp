@@ -643,6 +643,7 @@ void SceneParser::parse_solver(const json& j, const std::string& path) {
   sv.drag_integration = o.str("drag_integration", "");  // "": resolved by formulation in parse()
   sv.drag = o.str("drag", "");  // "": resolved by formulation in parse()
   sv.checkpoint_every = static_cast<int>(o.num("checkpoint_every", 50.0));
+  sv.soil_substeps = static_cast<int>(o.num("soil_substeps", 1.0));
   const Obj st = check_object(c_, o.ok("stabilisation") ? o.get("stabilisation") : json::object(),
                               o.at("stabilisation"), {&stabilisation_table()});
   sv.stabilisation.strain_smoothing = st.ok("strain_smoothing") ? st.get("strain_smoothing").get<bool>() : true;

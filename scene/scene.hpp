@@ -209,6 +209,7 @@ struct Solver {
   int checkpoint_every = 50;     // steps between in-memory snapshots of the last good state
   Air air;                       // mpm-fem: the gas above the water's free surface
   PhaseField phase_field;        // mpm-fem: the Allen–Cahn phase field phi (1 water, 0 air)
+  int soil_substeps = 1;         // mpm-fem: soil steps per step of the fluid and the phase field
 };
 
 /// An initialisation phase before the analysis (seed 001 App. B.4): t runs from -duration to 0

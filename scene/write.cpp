@@ -203,6 +203,7 @@ nlohmann::json to_json(const Scene& s) {
   if (row.find("/solver/escaped_water")) j["solver"]["escaped_water"] = sv.escaped_water;
   if (row.find("/solver/drag_integration")) j["solver"]["drag_integration"] = sv.drag_integration;
   if (row.find("/solver/drag")) j["solver"]["drag"] = sv.drag;
+  if (row.reads("/solver/soil_substeps")) j["solver"]["soil_substeps"] = sv.soil_substeps;
   if (row.reads("/solver/air"))
     j["solver"]["air"] = {{"density", sv.air.density}, {"dynamic_viscosity", sv.air.dynamic_viscosity}};
   if (row.reads("/solver/phase_field")) {  // an absent value stays absent: the solver's choice

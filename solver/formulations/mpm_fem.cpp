@@ -135,6 +135,7 @@ class MpmFem final : public Formulation<Dim> {
     pf.lsic = s.solver.phase_field.lsic;
     phase_.setup(grid_, fluid_.basis(), pf);
     phase_mobility_ = pf.mobility;
+    substeps_ = std::max(1, s.solver.soil_substeps);
     const std::size_t nodes = grid_.num_nodes();
     solid_.resize(nodes);
     sums_.assign(nodes, SoilSums{});
@@ -161,24 +162,34 @@ class MpmFem final : public Formulation<Dim> {
     if (water_volume0_ < 0.0) water_target_ = water_volume0_ = phase_.volume(fluid_.phi, soil_.n);  // int n phi at t = 0
     lap("soil p2g");
 
-    const double a0 = fluid_.seconds_assemble, f0 = fluid_.seconds_factorise, s0 = fluid_.seconds_solve;
-    if (!fluid_.step(soil_, b, dt)) {                                                          // (iii)
-      st.health.report_node(0, {0, 0, 0}, "fluid", "the fluid's system could not be solved (singular)");
-      return;
+    // Multi-rate (solver.soil_substeps = k): the fluid and the phase field advance at the first of
+    // every k soil steps, to the time the soil reaches after the k steps; the soil takes their
+    // pressure and velocity meanwhile (the seed's staggering, steps iii-v, with a longer fluid
+    // step). k = 1 is the seed's scheme: the fluid's step is the soil's.
+    if (substep_ == 0) {
+      const double dt_f = substeps_ == 1 ? dt : soil_time_ + substeps_ * dt - fluid_time_;
+      fluid_time_ = soil_time_ + (substeps_ == 1 ? dt : substeps_ * dt);
+      const double a0 = fluid_.seconds_assemble, f0 = fluid_.seconds_factorise, s0 = fluid_.seconds_solve;
+      if (!fluid_.step(soil_, b, dt_f)) {                                                        // (iii)
+        st.health.report_node(0, {0, 0, 0}, "fluid", "the fluid's system could not be solved (singular)");
+        return;
+      }
+      this->times_.add("fluid assembly", fluid_.seconds_assemble - a0);
+      this->times_.add("fluid factorisation", fluid_.seconds_factorise - f0);
+      this->times_.add("fluid solve", fluid_.seconds_solve - s0);
+      lap.restart();
+      check_fluid(st);
+      // The water's volume: what it was, less what flowed out through open faces this step
+      // (sum over their nodes of n phi v.n_out int N dGamma).
+      for (const auto& o : fluid_.conditions().open)
+        water_target_ -= dt_f * soil_.n[o.node] * std::clamp(fluid_.phi[o.node], 0.0, 1.0) * o.sign * fluid_.v[o.node][o.axis] * o.area;
+      if (phase_.step(fluid_.phi, fluid_.v, soil_.n, dt_f, water_target_) < 0)                 // (iv)
+        st.health.report_node(0, {0, 0, 0}, "fluid", "the phase field's solve did not converge");
+      water_corrected_ += phase_.last_corrected_volume;
+      lap("phase field");
     }
-    this->times_.add("fluid assembly", fluid_.seconds_assemble - a0);
-    this->times_.add("fluid factorisation", fluid_.seconds_factorise - f0);
-    this->times_.add("fluid solve", fluid_.seconds_solve - s0);
-    lap.restart();
-    check_fluid(st);
-    // The water's volume: what it was, less what flowed out through open faces this step
-    // (sum over their nodes of n phi v.n_out int N dGamma).
-    for (const auto& o : fluid_.conditions().open)
-      water_target_ -= dt * soil_.n[o.node] * std::clamp(fluid_.phi[o.node], 0.0, 1.0) * o.sign * fluid_.v[o.node][o.axis] * o.area;
-    if (phase_.step(fluid_.phi, fluid_.v, soil_.n, dt, water_target_) < 0)                     // (iv)
-      st.health.report_node(0, {0, 0, 0}, "fluid", "the phase field's solve did not converge");
-    water_corrected_ += phase_.last_corrected_volume;
-    lap("phase field");
+    substep_ = (substep_ + 1) % substeps_;
+    soil_time_ += dt;
 
     if (ps.size() == 0) return;
     fluid_on_soil(dt);                                                                         // (v)
@@ -224,11 +235,14 @@ class MpmFem final : public Formulation<Dim> {
     // phi = 0 and 1 is 2 M, forward Euler is stable below dt = 1 / M.
     const double dt_phase = 1.0 / phase_mobility_;
     std::ostringstream os;
-    const double dt = std::min({dt_soil, dt_fluid, dt_couple, dt_phase});
-    if (dt == dt_phase) os << "the phase field's explicit reaction (1 / M_phi = " << dt_phase << " s)";
-    else if (dt == dt_couple) os << "soil-fluid coupling (0.5 n rho_s' k / (n^2 mu) = " << dt_couple << " s, the least permeable soil)";
+    // With k soil substeps the fluid's limits hold for its step k dt.
+    const double k = substeps_;
+    const double dt = std::min({dt_soil, dt_fluid / k, dt_couple / k, dt_phase / k});
+    const std::string per_k = substeps_ > 1 ? " / soil_substeps " + std::to_string(substeps_) : "";
+    if (dt == dt_phase / k) os << "the phase field's explicit reaction (1 / M_phi = " << dt_phase << " s" << per_k << ")";
+    else if (dt == dt_couple / k) os << "soil-fluid coupling (0.5 n rho_s' k / (n^2 mu) = " << dt_couple << " s, the least permeable soil" << per_k << ")";
     else if (dt == dt_soil) os << "soil P-wave CFL (c = " << c << " m/s, |v_s|max = " << vs << " m/s)";
-    else os << "fluid advective CFL (|v_f|max = " << vf << " m/s)";
+    else os << "fluid advective CFL (|v_f|max = " << vf << " m/s" << per_k << ")";
     os << "; the water is incompressible";
     reason = os.str();
     return std::isfinite(dt) ? dt : kMaxStep;
@@ -352,7 +366,8 @@ class MpmFem final : public Formulation<Dim> {
 
   std::vector<typename Formulation<Dim>::Counter> counters() const override {
     const double V = phase_.volume(fluid_.phi, soil_.n);
-    return {{"fluid factorisations", static_cast<double>(fluid_.factorisations()), ""},
+    return {{"fluid steps", static_cast<double>(fluid_.solves), ""},
+            {"fluid factorisations", static_cast<double>(fluid_.factorisations()), ""},
             {"fluid Krylov iterations per step",
              fluid_.solves > 0 ? static_cast<double>(fluid_.krylov_iterations) / static_cast<double>(fluid_.solves) : 0.0, ""},
             {"water volume change", water_volume0_ > 0.0 ? (V - water_target_) / water_volume0_ * 100.0 : 0.0, "%"},
@@ -370,6 +385,7 @@ class MpmFem final : public Formulation<Dim> {
     c.put("formulation/fluid_p", fluid_.p);
     c.put("formulation/phi", fluid_.phi);
     c.put("formulation/water_volume0", std::vector<double>{water_volume0_, water_target_, water_corrected_});
+    c.put("formulation/multirate", std::vector<double>{static_cast<double>(substep_), soil_time_, fluid_time_});
     fluid_.refactorise();
   }
   void restore(const Checkpoint& c, State<Dim>& st) override {
@@ -384,6 +400,13 @@ class MpmFem final : public Formulation<Dim> {
     water_volume0_ = v0.empty() ? -1.0 : v0[0];
     water_target_ = v0.size() > 1 ? v0[1] : water_volume0_;
     water_corrected_ = v0.size() > 2 ? v0[2] : 0.0;
+    if (c.has("formulation/multirate")) {
+      std::vector<double> m;
+      c.get("formulation/multirate", m);
+      substep_ = static_cast<int>(m.at(0));
+      soil_time_ = m.at(1);
+      fluid_time_ = m.at(2);
+    }
     fluid_.refactorise();
   }
 
@@ -682,6 +705,10 @@ class MpmFem final : public Formulation<Dim> {
   double water_volume0_ = -1.0;  // m^Dim, int n phi at the first step (-1 before it)
   double water_target_ = -1.0;   // m^Dim, water_volume0_ less the outflow through open faces so far
   double water_corrected_ = 0.0;  // m^Dim, the phase field's volume corrections summed
+  int substeps_ = 1;               // solver.soil_substeps: soil steps per fluid step
+  int substep_ = 0;                // this step's place in its group of substeps_ (0: the fluid steps)
+  double soil_time_ = 0.0;         // s, the soil's time since the start (the initialisation included)
+  double fluid_time_ = 0.0;        // s, the fluid's (ahead of the soil's within a group)
   fem::SoilOnGrid<Dim> soil_;
   NodeFields<Dim> solid_;
   std::vector<SoilSums> sums_;

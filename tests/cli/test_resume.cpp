@@ -223,3 +223,14 @@ TEST(Resume, MpmFemTerzaghiBetweenFrames) {
   const Pair p = run_killed_and_resumed(s, "mpmfem", 3);
   expect_identical(p, "mpm-fem");
 }
+
+TEST(Resume, MpmFemMultiRateResumesInsideAGroupOfSoilSteps) {
+  // solver.soil_substeps = 3: checkpoints fall inside a group of soil steps (the fluid ahead of
+  // the soil); the resumed run continues the group where it was.
+  json s = shortened(example("terzaghi-mpm-fem/scene.json"), 0.1, 5);
+  s["time"]["dt"] = 5e-5;
+  s["solver"]["soil_substeps"] = 3;
+  s["output"]["checkpoint_interval"] = 0.0131;
+  const Pair p = run_killed_and_resumed(s, "mpmfem-multirate", 3);
+  expect_identical(p, "mpm-fem");
+}
