@@ -1,0 +1,261 @@
+#include "scene/auto_formulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "scene/budget.hpp"
+#include "scene/formulations.hpp"
+
+namespace swmpm::scene {
+namespace {
+
+std::string num(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
+std::string quoted(Formulation f) {
+  std::string q = "\"";  // (not "\"" + string: GCC 12's -Wrestrict false positive)
+  q += to_string(f);
+  q += '"';
+  return q;
+}
+
+/// Water's bulk modulus where a fluid material does not give one (mpm-fem's incompressible
+/// water): the estimate of the explicit step needs a K_f.
+constexpr double kWaterBulkModulus = 2.2e9;  // Pa
+
+/// The volume of a body's geometry [m^3, or m^2 in 2D]: exact for box, polygon, footing and slope;
+/// a file geometry (gmsh, surface-mesh) is known only once preprocess reads it, so it counts as
+/// half the grid's volume (the estimates' particle count, not the choice between them, depends on it).
+double body_volume(const Scene& s, const Body& b) {
+  const Geometry& g = b.geometry;
+  const int dim = s.dimension;
+  if (g.type == "box") {
+    double v = 1.0;
+    for (int a = 0; a < dim; ++a) v *= g.max[static_cast<std::size_t>(a)] - g.min[static_cast<std::size_t>(a)];
+    return v;
+  }
+  if (g.type == "polygon") {  // the shoelace formula
+    double twice = 0.0;
+    for (std::size_t i = 0; i < g.vertices.size(); ++i) {
+      const auto& p = g.vertices[i];
+      const auto& q = g.vertices[(i + 1) % g.vertices.size()];
+      twice += p[0] * q[1] - q[0] * p[1];
+    }
+    return 0.5 * std::abs(twice);
+  }
+  if (g.type == "footing") return g.width * g.height * (dim == 3 ? g.length : 1.0);
+  if (g.type == "slope") {
+    const double run = g.ratio > 0.0 ? g.ratio * g.height : g.height / std::tan(g.angle * M_PI / 180.0);
+    return g.foundation_depth * (g.toe_length + run + g.crest_length) + g.height * (g.crest_length + 0.5 * run);
+  }
+  double grid = 1.0;
+  for (int a = 0; a < dim; ++a) grid *= s.grid.max[static_cast<std::size_t>(a)] - s.grid.min[static_cast<std::size_t>(a)];
+  return 0.5 * grid;
+}
+
+double particles_of(const Scene& s, const Body& b) {
+  return body_volume(s, b) * std::pow(b.particles_per_cell / s.grid.cell_size, s.dimension);
+}
+
+/// Constrained modulus M = K + 4G/3 = E (1 - nu) / ((1 + nu)(1 - 2 nu)) [Pa] of a solid material
+/// with Young's modulus and Poisson's ratio (every solid model but Nor-Sand, whose modulus grows
+/// with the pressure: its scenes never reach the single-point comparison).
+double p_wave_modulus(const Material& m) {
+  if (!m.has("youngs_modulus")) return 0.0;
+  const double E = m.at("youngs_modulus"), nu = m.has("poisson_ratio") ? m.at("poisson_ratio") : 0.0;
+  return E * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
+}
+
+/// What the saturated bodies are made of, for the step limits of the single-point formulations.
+struct Skeleton {
+  double c_drained = 0.0;    // m/s, largest skeleton P-wave speed sqrt(M / rho_sat)
+  double c_undrained = 0.0;  // m/s, largest undrained one sqrt((M + K_f / n) / rho_sat)
+  double M = 0.0, Kf_over_n = 0.0;  // Pa, of the body that sets c_undrained
+  std::string body;                 // that body
+};
+
+Skeleton skeleton_of(const Scene& s) {
+  Skeleton k;
+  for (const Body& b : s.bodies) {
+    if (b.solid.empty() || b.fluid.empty()) continue;
+    const Material& soil = s.material(b.solid);
+    const Material& water = s.material(b.fluid);
+    const double n = b.initial.porosity ? *b.initial.porosity : soil.has("porosity") ? soil.at("porosity") : 0.3;
+    const double rho_w = water.has("density") ? water.at("density") : 1000.0;               // kg/m^3
+    const double K_f = water.has("bulk_modulus") ? water.at("bulk_modulus") : kWaterBulkModulus;  // Pa
+    const double rho_s = soil.has("density") ? soil.at("density") : (1.0 - n) * soil.at("grain_density");
+    const double rho_sat = rho_s + n * rho_w;  // kg/m^3, the mixture the wave carries
+    const double M = p_wave_modulus(soil);
+    // Undrained: the pore water's storage K_f / n adds to the skeleton's modulus (seed 000, eq. 9).
+    const double c_u = std::sqrt((M + K_f / n) / rho_sat);
+    k.c_drained = std::max(k.c_drained, std::sqrt(M / rho_sat));
+    if (c_u > k.c_undrained) {
+      k.c_undrained = c_u;
+      k.M = M;
+      k.Kf_over_n = K_f / n;
+      k.body = b.name;
+    }
+  }
+  return k;
+}
+
+/// The time a run spans: from the initialisation's start (before t = 0) to time.end.
+double span_of(const Scene& s) {
+  return s.time.end + (s.initialisation.enabled() ? s.initialisation.duration : 0.0);
+}
+
+FormulationEstimate estimate(const Scene& s, Formulation f, double c, const std::string& what, double points) {
+  FormulationEstimate e;
+  e.formulation = f;
+  e.wave_speed = c;
+  const double limit = s.grid.cell_size / c;  // s, the CFL limit h / c (the run adds |v|max to c)
+  e.dt = s.time.dt ? std::min(*s.time.dt, limit) : s.time.cfl * limit;
+  e.dt_reason = what + " c = " + num(c) + " m/s: " + (s.time.dt ? "time.dt " + num(*s.time.dt) + " s, at most" : "cfl " + num(s.time.cfl) + " x") +
+                " h / c = " + num(limit) + " s";
+  e.steps = std::ceil(span_of(s) / e.dt);
+  e.us_per_point_step = row_of(f).cost.us_per_point_step;
+  e.wall_seconds = e.steps * step_microseconds(s, f, points) * 1e-6;
+  return e;
+}
+
+std::string volume_text(double v, int dim) { return num(v) + (dim == 3 ? " m^3" : " m^2"); }
+
+}  // namespace
+
+FormulationChoice choose_formulation(const Scene& s) {
+  FormulationChoice c;
+  double free_water = 0.0, soil = 0.0;
+  std::string free_body, liquefiable_body, liquefiable_material;
+  for (const Body& b : s.bodies) {
+    c.points += particles_of(s, b);
+    const double v = body_volume(s, b);
+    if (b.solid.empty() && !b.fluid.empty()) {
+      free_water += v;
+      if (free_body.empty()) free_body = b.name;
+    } else if (!b.solid.empty()) {
+      soil += v;
+      if (!b.fluid.empty() && s.material(b.solid).model == MaterialModel::nor_sand && liquefiable_body.empty()) {
+        liquefiable_body = b.name;
+        liquefiable_material = b.solid;
+      }
+    }
+  }
+
+  // 1. No fluid anywhere: the skeleton alone.
+  if (!s.has_fluid()) {
+    c.chosen = Formulation::dry;
+    c.rule = "dry";
+    c.reason = "no body has a fluid, so the soil is dry: \"dry\" models the solid phase only";
+    return c;
+  }
+
+  // 2. Free water: water that moves apart from the soil needs water points of its own, or a fluid
+  //    on the grid when it is mostly free water and its waves matter (gravity, a free surface).
+  if (!free_body.empty()) {
+    c.rule = "free water";
+    const bool gravity = std::hypot(s.gravity[0], s.gravity[1], s.gravity[2]) > 0.0;
+    const bool bspline = s.grid.shape_function == ShapeFunction::bspline2 || s.grid.shape_function == ShapeFunction::bspline3;
+    const std::string volumes = "free water (body \"" + free_body + "\", " + volume_text(free_water, s.dimension) +
+                                " in all) against " + volume_text(soil, s.dimension) + " of soil";
+    if (free_water > soil && gravity && bspline) {
+      c.chosen = Formulation::mpm_fem;
+      c.reason = "the scene is mostly " + volumes + ", under gravity: its free surface and waves dominate, so "
+                 "\"mpm-fem\" solves the water on the grid (incompressible, no water points to spread or to limit the step)";
+    } else {
+      c.chosen = Formulation::explicit_double_point;
+      c.reason = "the scene has " + volumes + ": water that separates from the soil needs water points of its own, "
+                 "so \"explicit-double-point\"";
+      if (free_water > soil && gravity)
+        c.reason += " (the water dominates, where \"mpm-fem\" would suit, but it needs grid.shape_function "
+                    "\"bspline2\" or \"bspline3\", not \"" + to_string(s.grid.shape_function) + "\")";
+      else if (free_water <= soil)
+        c.reason += "; \"mpm-fem\" is for scenes that are mostly free water";
+      else
+        c.reason += "; without gravity there are no waves for \"mpm-fem\"'s free surface";
+    }
+    return c;
+  }
+
+  // 3. Soil that can liquefy: a state-dependent model whose loose states contract under shear, so
+  //    that the pore pressure can take the whole mean stress and the water separate from the grains.
+  if (!liquefiable_body.empty()) {
+    c.rule = "liquefiable";
+    c.chosen = Formulation::explicit_double_point;
+    c.reason = "body \"" + liquefiable_body + "\" is saturated " + to_string(s.material(liquefiable_material).model) +
+               " (material \"" + liquefiable_material + "\"), which can liquefy and separate from its water, so "
+               "\"explicit-double-point\" (water points of their own, the liquefied mixture's viscosity and its "
+               "separation at maximum_porosity)";
+    return c;
+  }
+
+  // 4. Pore water only: a single-point formulation, the one that reaches time.end sooner. Explicit:
+  //    the undrained P-wave (the pore water's K_f / n stiffens the mixture) limits the step;
+  //    semi-implicit: the skeleton's P-wave only (the pressure is implicit), at a larger cost per step.
+  c.rule = "pore water";
+  const Skeleton k = skeleton_of(s);
+  c.estimates.push_back(estimate(s, Formulation::explicit_single_point, k.c_undrained,
+                                 "undrained P-wave (M " + num(k.M) + " Pa + K_f/n " + num(k.Kf_over_n) + " Pa)", c.points));
+  c.estimates.push_back(estimate(s, Formulation::semi_implicit_single_point, k.c_drained, "skeleton P-wave", c.points));
+  const FormulationEstimate& e = c.estimates[0];
+  const FormulationEstimate& i = c.estimates[1];
+  const bool explicit_wins = e.wall_seconds <= i.wall_seconds;
+  c.chosen = explicit_wins ? e.formulation : i.formulation;
+  const FormulationEstimate& win = explicit_wins ? e : i;
+  const FormulationEstimate& lose = explicit_wins ? i : e;
+  c.reason = "the soil holds pore water only (no free water, no soil that can liquefy), so a single-point "
+             "formulation: " + quoted(c.chosen) + " reaches time.end " + num(s.time.end) + " s in about " +
+             format_duration(win.wall_seconds) + " (" + num(win.steps) + " steps of " + num(win.dt) + " s) against " +
+             format_duration(lose.wall_seconds) + " for " + quoted(lose.formulation) + " (" + num(lose.steps) +
+             " steps of " + num(lose.dt) + " s). The pore water's K_f/n (" + num(k.Kf_over_n) + " Pa against the "
+             "skeleton's " + num(k.M) + " Pa) makes the undrained wave " + num(k.c_undrained / k.c_drained) +
+             " times faster than the skeleton's, and a semi-implicit step costs " +
+             num(i.us_per_point_step / e.us_per_point_step) + " times an explicit one";
+  return c;
+}
+
+nlohmann::json to_json(const FormulationChoice& c) {
+  nlohmann::json j = {{"chosen", to_string(c.chosen)}, {"automatic", true}, {"rule", c.rule}, {"reason", c.reason}};
+  if (!c.estimates.empty()) {
+    j["points"] = c.points;
+    j["estimates"] = nlohmann::json::array();
+    for (const FormulationEstimate& e : c.estimates)
+      j["estimates"].push_back({{"formulation", to_string(e.formulation)},
+                                {"dt", e.dt},
+                                {"dt_reason", e.dt_reason},
+                                {"wave_speed", e.wave_speed},
+                                {"steps", e.steps},
+                                {"us_per_point_step", e.us_per_point_step},
+                                {"wall_seconds", e.wall_seconds}});
+  }
+  return j;
+}
+
+nlohmann::json choice_of(const Scene& s) {
+  if (s.formulation_choice.is_object()) return s.formulation_choice;
+  return {{"chosen", to_string(s.formulation)}, {"automatic", false}, {"reason", s.formulation_reason}};
+}
+
+std::vector<std::string> explain_lines(const nlohmann::json& choice) {
+  std::vector<std::string> lines;
+  if (!choice.is_object()) return lines;
+  const bool automatic = choice.value("automatic", false);
+  lines.push_back("formulation " + choice.value("chosen", std::string("?")) +
+                  (automatic ? " (chosen by \"auto\"): " : " (named in the scene file): ") + choice.value("reason", std::string()));
+  if (choice.contains("estimates") && choice["estimates"].is_array())
+    for (const auto& e : choice["estimates"]) {
+      if (!e.is_object()) continue;
+      lines.push_back("  estimate " + e.value("formulation", std::string("?")) + ": dt " + num(e.value("dt", 0.0)) +
+                      " s (" + e.value("dt_reason", std::string()) + "), " + num(e.value("steps", 0.0)) + " steps x " +
+                      num(choice.value("points", 0.0)) + " particles x " + num(e.value("us_per_point_step", 0.0)) +
+                      " us per particle-step = about " + format_duration(e.value("wall_seconds", 0.0)) +
+                      " on one thread");
+    }
+  return lines;
+}
+
+}  // namespace swmpm::scene
