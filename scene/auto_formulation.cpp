@@ -62,46 +62,83 @@ double particles_of(const Scene& s, const Body& b) {
   return body_volume(s, b) * std::pow(b.particles_per_cell / s.grid.cell_size, s.dimension);
 }
 
-/// Constrained modulus M = K + 4G/3 = E (1 - nu) / ((1 + nu)(1 - 2 nu)) [Pa] of a solid material
-/// with Young's modulus and Poisson's ratio (every solid model but Nor-Sand, whose modulus grows
-/// with the pressure: its scenes never reach the single-point comparison).
-double p_wave_modulus(const Material& m) {
+/// Constrained modulus M = K + 4G/3 [Pa] of a solid material at mean effective stress `p` [Pa]:
+/// E (1 - nu) / ((1 + nu)(1 - 2 nu)) for the models with Young's modulus; Nor-Sand's tangent
+/// K = p / kappa~ and mu_e = mu0 + alpha0 p (NS3, as its max_p_wave_modulus) at p, no less than its
+/// reference pressure.
+double p_wave_modulus(const Material& m, double p) {
+  if (m.model == MaterialModel::nor_sand) {
+    const double pp = std::max(p, m.at("reference_pressure"));
+    return pp / m.at("swelling_index") + 4.0 / 3.0 * (m.at("shear_modulus") + m.at("shear_modulus_coupling") * pp);
+  }
   if (!m.has("youngs_modulus")) return 0.0;
   const double E = m.at("youngs_modulus"), nu = m.has("poisson_ratio") ? m.at("poisson_ratio") : 0.0;
   return E * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
 }
 
-/// What the saturated bodies are made of, for the step limits of the single-point formulations.
-struct Skeleton {
-  double c_drained = 0.0;    // m/s, largest skeleton P-wave speed sqrt(M / rho_sat)
-  double c_undrained = 0.0;  // m/s, largest undrained one sqrt((M + K_f / n) / rho_sat)
-  double M = 0.0, Kf_over_n = 0.0;  // Pa, of the body that sets c_undrained
+/// A body's vertical extent [m] (y): its box or polygon, else the grid's.
+double body_height(const Scene& s, const Body& b) {
+  const Geometry& g = b.geometry;
+  if (g.type == "box") return g.max[1] - g.min[1];
+  if (g.type == "polygon" && !g.vertices.empty()) {
+    double lo = g.vertices[0][1], hi = lo;
+    for (const auto& v : g.vertices) lo = std::min(lo, v[1]), hi = std::max(hi, v[1]);
+    return hi - lo;
+  }
+  if (g.type == "slope") return g.foundation_depth + g.height;
+  return s.grid.max[1] - s.grid.min[1];
+}
+
+/// The P-wave speeds of the saturated bodies at t = 0 (their largest), for the step limits.
+struct Waves {
+  double c_skeleton = 0.0;  // m/s, sqrt(M / rho_sat): the semi-implicit formulations (core.hpp)
+  double c_undrained = 0.0; // m/s, sqrt((M + K_f / n) / rho_sat): explicit-single-point
+  double c_double = 0.0;    // m/s, explicit-double-point's solid points:
+                            //   c^2 = M / rho_s' + K_f [(1 - n) / (n rho_S) + 1 / rho_f]
+  double M = 0.0, Kf_over_n = 0.0;  // Pa, of the body with the fastest undrained wave
   std::string body;                 // that body
 };
 
-Skeleton skeleton_of(const Scene& s) {
-  Skeleton k;
+Waves waves_of(const Scene& s) {
+  Waves w;
+  const double g = std::hypot(s.gravity[0], s.gravity[1], s.gravity[2]);
   for (const Body& b : s.bodies) {
     if (b.solid.empty() || b.fluid.empty()) continue;
     const Material& soil = s.material(b.solid);
     const Material& water = s.material(b.fluid);
     const double n = b.initial.porosity ? *b.initial.porosity : soil.has("porosity") ? soil.at("porosity") : 0.3;
-    const double rho_w = water.has("density") ? water.at("density") : 1000.0;               // kg/m^3
+    const double rho_w = water.has("density") ? water.at("density") : 1000.0;                    // kg/m^3
     const double K_f = water.has("bulk_modulus") ? water.at("bulk_modulus") : kWaterBulkModulus;  // Pa
-    const double rho_s = soil.has("density") ? soil.at("density") : (1.0 - n) * soil.at("grain_density");
+    const double rho_s = soil.has("density") ? soil.at("density") : (1.0 - n) * soil.at("grain_density");  // (1-n) rho_S
     const double rho_sat = rho_s + n * rho_w;  // kg/m^3, the mixture the wave carries
-    const double M = p_wave_modulus(soil);
-    // Undrained: the pore water's storage K_f / n adds to the skeleton's modulus (seed 000, eq. 9).
+    // A pressure-dependent skeleton (Nor-Sand) at the geostatic mean effective stress at the body's
+    // base, K0 = 0.5: p' = (rho_sat - rho_w) g H (1 + 2 K0) / 3.
+    const double p = (rho_sat - rho_w) * g * body_height(s, b) * 2.0 / 3.0;
+    const double M = p_wave_modulus(soil, p);
     const double c_u = std::sqrt((M + K_f / n) / rho_sat);
-    k.c_drained = std::max(k.c_drained, std::sqrt(M / rho_sat));
-    if (c_u > k.c_undrained) {
-      k.c_undrained = c_u;
-      k.M = M;
-      k.Kf_over_n = K_f / n;
-      k.body = b.name;
+    w.c_skeleton = std::max(w.c_skeleton, std::sqrt(M / rho_sat));
+    w.c_double = std::max(w.c_double, std::sqrt(M / rho_s + K_f * ((1.0 - n) / (n * rho_s / (1.0 - n)) + 1.0 / rho_w)));
+    if (c_u > w.c_undrained) {
+      w.c_undrained = c_u;
+      w.M = M;
+      w.Kf_over_n = K_f / n;
+      w.body = b.name;
     }
   }
-  return k;
+  return w;
+}
+
+/// Whether the scene passes formulation f's own checks (scene/formulations.hpp, e.g. the
+/// semi-implicit ones refuse one point per cell with B-splines): a candidate that fails is not chosen.
+bool passes_checks(const Scene& s, Formulation f) {
+  const FormulationRow& row = row_of(f);
+  if (!row.implemented) return false;
+  if (!row.check) return true;
+  Scene as_f = s;
+  as_f.formulation = f;
+  std::vector<Problem> problems;
+  row.check(as_f, problems);
+  return problems.empty();
 }
 
 /// The time a run spans: from the initialisation's start (before t = 0) to time.end.
@@ -124,6 +161,30 @@ FormulationEstimate estimate(const Scene& s, Formulation f, double c, const std:
 }
 
 std::string volume_text(double v, int dim) { return num(v) + (dim == 3 ? " m^3" : " m^2"); }
+
+/// Chooses between an explicit formulation (its step limited by wave speed `c_explicit`) and a
+/// semi-implicit one (the skeleton's wave) by their estimated wall times to time.end; a candidate
+/// whose own scene checks fail is left out. `why` opens the reason: the branch that led here.
+void compare(const Scene& s, FormulationChoice& c, const std::string& why, Formulation explicit_f, double c_explicit,
+             const std::string& explicit_what, Formulation semi_f, const Waves& w) {
+  c.estimates.push_back(estimate(s, explicit_f, c_explicit, explicit_what, c.points));
+  c.estimates.push_back(estimate(s, semi_f, w.c_skeleton, "skeleton P-wave", c.points));
+  const FormulationEstimate& e = c.estimates[0];
+  const FormulationEstimate& i = c.estimates[1];
+  const bool semi_ok = passes_checks(s, semi_f);
+  const bool explicit_wins = !semi_ok || e.wall_seconds <= i.wall_seconds;
+  c.chosen = explicit_wins ? e.formulation : i.formulation;
+  const FormulationEstimate& win = explicit_wins ? e : i;
+  const FormulationEstimate& lose = explicit_wins ? i : e;
+  c.reason = why + ": " + quoted(c.chosen) + " reaches time.end " + num(s.time.end) + " s in about " +
+             format_duration(win.wall_seconds) + " (" + num(win.steps) + " steps of " + num(win.dt) + " s) against " +
+             format_duration(lose.wall_seconds) + " for " + quoted(lose.formulation) + " (" + num(lose.steps) +
+              steps of " + num(lose.dt) + " s). The pore water's storage (body \"" + w.body + "\") makes the explicit step's wave " +
+             num(c_explicit / w.c_skeleton) + " times faster than the skeleton's, and a semi-implicit step costs " +
+             num(i.us_per_point_step / e.us_per_point_step) + " times an explicit one";
+  if (!semi_ok)
+    c.reason += "; " + quoted(semi_f) + " is left out: the scene fails its checks (preprocess --explain with it named says why)";
+}
 
 }  // namespace
 
@@ -182,14 +243,17 @@ FormulationChoice choose_formulation(const Scene& s) {
   }
 
   // 3. Soil that can liquefy: a state-dependent model whose loose states contract under shear, so
-  //    that the pore pressure can take the whole mean stress and the water separate from the grains.
+  //    that the pore pressure can take the whole mean stress and the water separate from the
+  //    grains: a double-point formulation, explicit or semi-implicit by cost (as 4).
+  const Waves w = waves_of(s);
   if (!liquefiable_body.empty()) {
     c.rule = "liquefiable";
-    c.chosen = Formulation::explicit_double_point;
-    c.reason = "body \"" + liquefiable_body + "\" is saturated " + to_string(s.material(liquefiable_material).model) +
-               " (material \"" + liquefiable_material + "\"), which can liquefy and separate from its water, so "
-               "\"explicit-double-point\" (water points of their own, the liquefied mixture's viscosity and its "
-               "separation at maximum_porosity)";
+    const std::string why = "body \"" + liquefiable_body + "\" is saturated " +
+                            to_string(s.material(liquefiable_material).model) + " (material \"" + liquefiable_material +
+                            "\"), which can liquefy and separate from its water, so a double-point formulation (water "
+                            "points of their own)";
+    compare(s, c, why, Formulation::explicit_double_point, w.c_double,
+            "P-wave of the solid points with the water's storage", Formulation::semi_implicit_double_point, w);
     return c;
   }
 
@@ -197,24 +261,10 @@ FormulationChoice choose_formulation(const Scene& s) {
   //    the undrained P-wave (the pore water's K_f / n stiffens the mixture) limits the step;
   //    semi-implicit: the skeleton's P-wave only (the pressure is implicit), at a larger cost per step.
   c.rule = "pore water";
-  const Skeleton k = skeleton_of(s);
-  c.estimates.push_back(estimate(s, Formulation::explicit_single_point, k.c_undrained,
-                                 "undrained P-wave (M " + num(k.M) + " Pa + K_f/n " + num(k.Kf_over_n) + " Pa)", c.points));
-  c.estimates.push_back(estimate(s, Formulation::semi_implicit_single_point, k.c_drained, "skeleton P-wave", c.points));
-  const FormulationEstimate& e = c.estimates[0];
-  const FormulationEstimate& i = c.estimates[1];
-  const bool explicit_wins = e.wall_seconds <= i.wall_seconds;
-  c.chosen = explicit_wins ? e.formulation : i.formulation;
-  const FormulationEstimate& win = explicit_wins ? e : i;
-  const FormulationEstimate& lose = explicit_wins ? i : e;
-  c.reason = "the soil holds pore water only (no free water, no soil that can liquefy), so a single-point "
-             "formulation: " + quoted(c.chosen) + " reaches time.end " + num(s.time.end) + " s in about " +
-             format_duration(win.wall_seconds) + " (" + num(win.steps) + " steps of " + num(win.dt) + " s) against " +
-             format_duration(lose.wall_seconds) + " for " + quoted(lose.formulation) + " (" + num(lose.steps) +
-             " steps of " + num(lose.dt) + " s). The pore water's K_f/n (" + num(k.Kf_over_n) + " Pa against the "
-             "skeleton's " + num(k.M) + " Pa) makes the undrained wave " + num(k.c_undrained / k.c_drained) +
-             " times faster than the skeleton's, and a semi-implicit step costs " +
-             num(i.us_per_point_step / e.us_per_point_step) + " times an explicit one";
+  compare(s, c, "the soil holds pore water only (no free water, no soil that can liquefy), so a single-point formulation",
+          Formulation::explicit_single_point, w.c_undrained,
+          "undrained P-wave (M " + num(w.M) + " Pa + K_f/n " + num(w.Kf_over_n) + " Pa)",
+          Formulation::semi_implicit_single_point, w);
   return c;
 }
 

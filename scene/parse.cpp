@@ -50,8 +50,11 @@ Scene SceneParser::parse() {
   parse_solver(top.ok("solver") ? top.get("solver") : json::object(), top.at("solver"));
   if (top.ok("formulation")) resolve_formulation(top.str("formulation"), top.at("formulation"));
   // The resolved scene.json of a run directory: how "auto" chose, kept for solve's log and run.json.
-  if (root_.contains("formulation_choice") && root_["formulation_choice"].is_object() && s_.formulation_choice.is_null())
+  if (root_.contains("formulation_choice") && root_["formulation_choice"].is_object() && s_.formulation_choice.is_null()) {
     s_.formulation_choice = root_["formulation_choice"];
+    if (s_.formulation_choice.value("automatic", false))
+      s_.formulation_reason = s_.formulation_choice.value("reason", s_.formulation_reason);
+  }
   // A key the formulation does not read, where "auto" chose it: the message says so, and how to choose.
   const std::string chosen_note =
       s_.formulation_choice.value("automatic", false) && !root_.contains("formulation_choice")

@@ -956,6 +956,7 @@ class Runner {
       rj["failed_node"] = {{"index", state_.health.node}, {"position", std::vector<double>(x.begin(), x.begin() + Dim)}};
     }
     rj["formulation"] = f_->name();
+    rj["formulation_reason"] = scene_.formulation_reason;
     rj["formulation_choice"] = scene::choice_of(scene_);
     rj["dimension"] = Dim;
     rj["shape_function"] = scene::to_string(scene_.grid.shape_function);
