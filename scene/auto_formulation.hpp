@@ -25,6 +25,7 @@ struct FormulationEstimate {
   double dt = 0.0;                 // s: the step it would run at (cfl x h / c, or time.dt when smaller)
   std::string dt_reason;           // what limits the step, in words with the modulus
   double steps = 0.0;              // to time.end
+  double points = 0.0;             // particles and water points it carries (from the bodies' volumes)
   double us_per_point_step = 0.0;  // µs, the Cost row's measured cost per particle and step
   double wall_seconds = 0.0;       // one thread
 };
@@ -33,7 +34,7 @@ struct FormulationChoice {
   Formulation chosen = Formulation::dry;
   std::string rule;    // the branch that decided: "dry", "pore water", "free water", "liquefiable"
   std::string reason;  // one or two sentences with numbers
-  double points = 0.0; // particles the estimates assume (from the bodies' volumes)
+  double points = 0.0; // particles the bodies would seed (from their volumes)
   std::vector<FormulationEstimate> estimates;  // the compared candidates; empty when no cost decided
 };
 
@@ -42,8 +43,8 @@ struct FormulationChoice {
 FormulationChoice choose_formulation(const Scene& s);
 
 /// run.json's and the resolved scene.json's `formulation_choice`:
-/// {"chosen", "automatic": true, "rule", "reason", "points", "estimates": [{"formulation", "dt",
-/// "dt_reason", "wave_speed", "steps", "us_per_point_step", "wall_seconds"}, ...]}.
+/// {"chosen", "automatic": true, "rule", "reason", "estimates": [{"formulation", "dt", "dt_reason",
+/// "wave_speed", "steps", "points", "us_per_point_step", "wall_seconds"}, ...]}.
 nlohmann::json to_json(const FormulationChoice& c);
 
 /// A parsed scene's `formulation_choice`, or for a formulation the file named {"chosen", "automatic":

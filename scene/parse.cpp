@@ -50,14 +50,22 @@ Scene SceneParser::parse() {
   parse_solver(top.ok("solver") ? top.get("solver") : json::object(), top.at("solver"));
   if (top.ok("formulation")) resolve_formulation(top.str("formulation"), top.at("formulation"));
   // The resolved scene.json of a run directory: how "auto" chose, kept for solve's log and run.json.
-  if (root_.contains("formulation_choice") && root_["formulation_choice"].is_object() && s_.formulation_choice.is_null()) {
-    s_.formulation_choice = root_["formulation_choice"];
-    if (s_.formulation_choice.value("automatic", false))
-      s_.formulation_reason = s_.formulation_choice.value("reason", s_.formulation_reason);
+  if (root_.contains("formulation_choice") && root_["formulation_choice"].is_object()) {
+    const json& fc = root_["formulation_choice"];
+    const bool recorded = fc.contains("chosen") && fc["chosen"] == to_string(s_.formulation) &&
+                          fc.contains("reason") && fc["reason"].is_string() && s_.formulation_choice.is_null();
+    if (!recorded) {
+      c_.error(top.at("formulation_choice"), "got " + shown(fc) + ", expected the record preprocess writes of how \"auto\" "
+                                             "chose formulation " + in_quotes(to_string(s_.formulation)) +
+                                             " (a scene file leaves it out)");
+    } else {
+      s_.formulation_choice = fc;
+      if (fc.contains("automatic") && fc["automatic"] == true) s_.formulation_reason = fc["reason"].get<std::string>();
+    }
   }
   // A key the formulation does not read, where "auto" chose it: the message says so, and how to choose.
   const std::string chosen_note =
-      s_.formulation_choice.value("automatic", false) && !root_.contains("formulation_choice")
+      s_.formulation_choice.is_object() && !root_.contains("formulation_choice")
           ? " (formulation " + in_quotes(to_string(s_.formulation)) + " was chosen automatically by \"auto\", rule \"" +
                 s_.formulation_choice.value("rule", std::string()) +
                 "\"; `swmpm preprocess --explain` says why; name a formulation in /formulation to use this key)"
