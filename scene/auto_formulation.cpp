@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
+#include <numbers>
 
 #include "scene/budget.hpp"
 #include "scene/formulations.hpp"
@@ -50,7 +50,7 @@ double body_volume(const Scene& s, const Body& b) {
   }
   if (g.type == "footing") return g.width * g.height * (dim == 3 ? g.length : 1.0);
   if (g.type == "slope") {
-    const double run = g.ratio > 0.0 ? g.ratio * g.height : g.height / std::tan(g.angle * M_PI / 180.0);
+    const double run = g.ratio > 0.0 ? g.ratio * g.height : g.height / std::tan(g.angle * std::numbers::pi / 180.0);
     return g.foundation_depth * (g.toe_length + run + g.crest_length) + g.height * (g.crest_length + 0.5 * run);
   }
   double grid = 1.0;

@@ -60,7 +60,7 @@ TEST(AutoFormulationCli, ExplainPrintsBothEstimatesAndWritesNothing) {
     const auto at = r.out.find(line);
     ASSERT_NE(at, std::string::npos) << line << "\n" << r.out;
     const std::string rest = r.out.substr(at, r.out.find('\n', at) - at);
-    EXPECT_NEAR(std::stod(rest.substr(line.size())), e.dt, 1e-3 * e.dt) << rest;
+    EXPECT_NEAR(std::stod(rest.substr(line.size())), e.dt, 4e-3 * e.dt) << rest;  // printed to 3 digits
     EXPECT_NE(rest.find("about " + swmpm::scene::format_duration(e.wall_seconds)), std::string::npos) << rest;
   }
   EXPECT_EQ(c.chosen, swmpm::scene::Formulation::semi_implicit_single_point);
