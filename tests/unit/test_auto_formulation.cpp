@@ -129,6 +129,22 @@ TEST(AutoFormulation, TheSinglePointChoiceFlipsWithTheNumbers) {
   EXPECT_EQ(last, Formulation::explicit_single_point);
 }
 
+// A candidate the scene's own checks refuse is not chosen, however cheap: one point per cell with
+// B-splines diverges in the semi-implicit formulations, so the column goes explicit and says why.
+TEST(AutoFormulation, ACandidateTheSceneCannotRunIsLeftOut) {
+  json j = terzaghi_auto();
+  j["grid"]["shape_function"] = "bspline2";
+  j["bodies"][0]["particles_per_cell"] = 1;
+  const FormulationChoice c = choice(j);
+  ASSERT_EQ(c.estimates.size(), 2u);
+  EXPECT_LT(estimate_of(c, Formulation::semi_implicit_single_point).wall_seconds,
+            estimate_of(c, Formulation::explicit_single_point).wall_seconds);
+  EXPECT_EQ(c.chosen, Formulation::explicit_single_point);
+  EXPECT_NE(c.reason.find("\"semi-implicit-single-point\" is left out"), std::string::npos) << c.reason;
+  j["bodies"][0]["particles_per_cell"] = 2;
+  EXPECT_EQ(choice(j).chosen, Formulation::semi_implicit_single_point);
+}
+
 // Free water: a water column on a thin bed is mostly water, under gravity: mpm-fem on B-splines,
 // explicit-double-point on GIMP (mpm-fem needs B-splines) and when the water is the smaller part.
 TEST(AutoFormulation, FreeWaterTakesADoublePointOrMpmFem) {
