@@ -296,6 +296,10 @@ int main(int argc, char** argv) {
                   "files outside the scene's and its own folder is refused");
   };
   run_dir_flags(pre);
+  bool explain = false;
+  pre->add_flag("--explain", explain,
+                "Print the formulation, why (\"auto\": the rule and, for pore water only, both single-point "
+                "estimates) and exit; writes nothing");
 
   auto* solve = app.add_subcommand("solve", "Run the scene's formulation in RUN_DIR");
   solve->add_option("run_dir", run_dir, "Run directory written by preprocess")->required();
@@ -347,6 +351,10 @@ int main(int argc, char** argv) {
         std::cerr << "swmpm: --max-memory: " << e.what() << "\n";
         return 2;
       }
+    }
+    if (*pre && explain) {
+      for (const std::string& line : swmpm::pre::explain(scene_path)) std::cout << line << "\n";
+      return 0;
     }
     if (*pre) {
       swmpm::pre::preprocess(scene_path, out_dir, pre_opt);

@@ -12,6 +12,7 @@
 
 #include "preprocess/initial_state.hpp"
 #include "preprocess/shape.hpp"
+#include "scene/auto_formulation.hpp"
 #include "scene/budget.hpp"
 #include "scene/expression.hpp"
 #include "scene/input.hpp"
@@ -397,6 +398,12 @@ void prepare_run_directory(files::RunDirectory& run, bool overwrite) {
 
 }  // namespace
 
+std::vector<std::string> explain(const std::string& scene_path) {
+  const scene::Scene s = scene::load_scene(scene_path);
+  reject_unused_switches(scene_path, s);
+  return scene::explain_lines(scene::choice_of(s));
+}
+
 std::string preprocess(const std::string& scene_path, const std::string& out_dir, bool quiet) {
   return preprocess(scene_path, out_dir, PreprocessOptions{quiet, false, false});
 }
@@ -415,7 +422,8 @@ std::string preprocess(const std::string& scene_path, const std::string& out_dir
   const fs::path dir = out_dir.empty() ? fs::path("runs") / s.name : fs::path(out_dir);
   files::RunDirectory run(dir);
   prepare_run_directory(run, options.overwrite);
-  if (!quiet) std::cout << "preprocess: formulation " << scene::to_string(s.formulation) << " (" << s.formulation_reason << ")\n";
+  if (!quiet)
+    for (const std::string& line : scene::explain_lines(scene::choice_of(s))) std::cout << "preprocess: " << line << "\n";
   const bool pore_fluid_on_solid = phases.solid.find("fluid_mass") != nullptr;  // single-point (double-point: water points in fluid.vtu)
   try {
     run.write_text("scene.json", scene::to_json(s).dump(2) + "\n");

@@ -83,6 +83,11 @@ struct PreprocessOptions {
   double max_memory = 0.0;      // B, --max-memory: refuse a scene that needs more (0: the machine's memory)
 };
 
+/// `preprocess --explain`: the scene's formulation, why, and the estimates behind an "auto" choice
+/// (scene/auto_formulation.hpp), as printed lines. Checks the scene as preprocess does before it
+/// seeds (throws scene::SceneError) and writes nothing.
+std::vector<std::string> explain(const std::string& scene_path);
+
 /// Runs the whole stage. Nothing is written unless everything succeeds. Returns the run directory
 /// (`out_dir`, or runs/<scene name> when empty). Throws scene::SceneError (the scene),
 /// files::RunDirectoryError (a folder holding an earlier run, or a file swmpm did not write where

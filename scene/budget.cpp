@@ -206,6 +206,11 @@ void check_run_memory(const Scene& s, const std::string& scene_file, double poin
   refuse_over(s, scene_file, points, 0.0, nullptr, 0, limit);
 }
 
+double step_microseconds(const Scene& s, Formulation f, double points) {
+  const Cost& c = row_of(f).cost;
+  return 20.0 + points * c.us_per_point_step + grid_extent(s).nodes * c.us_per_node_step;
+}
+
 RunEstimate estimate_run(const Scene& s, double points, double dt, double t0) {
   RunEstimate e;
   const double span = s.time.end - t0;
@@ -220,9 +225,7 @@ RunEstimate estimate_run(const Scene& s, double points, double dt, double t0) {
   // ~12 characters per column.
   const double frame_bytes = 1024.0 + 20.0 * points + (grid_frames ? 20.0 * g.nodes : 0.0);
   e.output_bytes = e.frames * frame_bytes + e.monitor_rows * 12.0 * columns;
-  const Cost& c = cost_of(s);
-  const double step_us = 20.0 + points * c.us_per_point_step + g.nodes * c.us_per_node_step;
-  e.wall_seconds = e.steps * step_us * 1e-6;
+  e.wall_seconds = e.steps * step_microseconds(s, s.formulation, points) * 1e-6;
   std::ostringstream os;
   os << "estimate: " << num(e.steps) << " steps (" << num(span) << " s at dt " << num(dt) << " s), " << num(e.frames)
      << " frames, " << num(e.monitor_rows) << " monitor rows, at least " << format_bytes(e.output_bytes)

@@ -63,6 +63,11 @@ struct RunEstimate {
   double wall_seconds = 0.0;  // one thread at the bench machine's speed (Cost)
   std::string summary;        // one line for the log
 };
+/// One step of formulation `f` with `points` particles (and water points) on the scene's grid [µs],
+/// one thread at the bench machine's speed: a fixed 20 µs, plus the Cost row's per particle and per
+/// node of the whole grid.
+double step_microseconds(const Scene& s, Formulation f, double points);
+
 /// `points`: particles and water points; `dt`: the step the run starts with; `t_from`: the time it
 /// starts from (the initialisation's start, or a checkpoint's time).
 RunEstimate estimate_run(const Scene& s, double points, double dt, double t_from);

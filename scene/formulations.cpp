@@ -102,7 +102,10 @@ std::vector<FormulationRow> make_rows() {
                   .check = nullptr,
                   .material_keys = {"bulk_modulus"},
                   .keys = phase_materials,
-                  .cost = {.bytes_per_point = 1000.0, .bytes_per_node = 100.0, .node_bytes_3d = 1.5, .us_per_point_step = 0.35, .us_per_node_step = 0.002}});
+                  .cost = {.bytes_per_point = 1000.0, .bytes_per_node = 100.0, .node_bytes_3d = 1.5,
+                           // 0.357 µs: the saturated GIMP box, 100k particles, one thread, best of 3
+                           // (bench/results/explicit-single-point-box-2026-12-02.md)
+                           .us_per_point_step = 0.357, .us_per_node_step = 0.002}});
   // Semi-implicit: the node-wise projection with a linear basis (seed 001's eq. 77 is its
   // constant-basis case, which biases free-surface nodes: 3.4 % pressure error and 1e-3 m/s of
   // spurious flow in a hydrostatic layer at rest, where the linear one is exact; docs/verification.md).
@@ -119,7 +122,11 @@ std::vector<FormulationRow> make_rows() {
                   .check = check_semi_implicit,
                   .material_keys = {"bulk_modulus"},
                   .keys = phase_materials,
-                  .cost = {.bytes_per_point = 900.0, .bytes_per_node = 150.0, .node_bytes_3d = 3.0, .us_per_point_step = 1.2, .us_per_node_step = 0.01}});
+                  .cost = {.bytes_per_point = 900.0, .bytes_per_node = 150.0, .node_bytes_3d = 3.0,
+                           // 1.38 µs: the same box, one thread, best of 3, CHOLMOD's factor reused
+                           // (bench/results/semi-implicit-box-2026-12-02.md; B4's slope on bspline2:
+                           // 0.62, bench/results/bspline-closed-form-2026-12-02.md)
+                           .us_per_point_step = 1.38, .us_per_node_step = 0.01}});
   std::vector<Switch> double_point = semi_implicit;
   double_point.push_back({"/solver/escaped_water", {"keep", "remove"}, "keep"});
   double_point.push_back({"/initialisation/tie_water", {"true", "false"}, "true"});
@@ -133,7 +140,10 @@ std::vector<FormulationRow> make_rows() {
                   .check = check_semi_implicit,
                   .material_keys = {"bulk_modulus"},
                   .keys = phase_materials,
-                  .cost = {.bytes_per_point = 700.0, .bytes_per_node = 150.0, .node_bytes_3d = 3.0, .us_per_point_step = 1.2, .us_per_node_step = 0.01}});
+                  .cost = {.bytes_per_point = 700.0, .bytes_per_node = 150.0, .node_bytes_3d = 3.0,
+                           // 0.89 µs per point (soil and water points of the saturated box, 200k
+                           // points, one thread; bench/results/semi-implicit-box-2026-12-02.md)
+                           .us_per_point_step = 0.89, .us_per_node_step = 0.01}});
   rows.push_back({.id = Formulation::explicit_double_point,
                   .name = "explicit-double-point",
                   .paper = "seed 003",
@@ -146,7 +156,10 @@ std::vector<FormulationRow> make_rows() {
                   .check = nullptr,
                   .material_keys = {"bulk_modulus", "grain_diameter", "ergun_a", "ergun_b", "maximum_porosity", "cavitation_threshold"},
                   .keys = phase_materials,
-                  .cost = {.bytes_per_point = 700.0, .bytes_per_node = 100.0, .node_bytes_3d = 1.5, .us_per_point_step = 0.8, .us_per_node_step = 0.002}});
+                  .cost = {.bytes_per_point = 700.0, .bytes_per_node = 100.0, .node_bytes_3d = 1.5,
+                           // 0.198 µs per point (99 856 solid + 99 856 liquid points, one thread,
+                           // best of 3; bench/results/explicit-double-point-box-2026-12-04.md)
+                           .us_per_point_step = 0.198, .us_per_node_step = 0.002}});
   rows.push_back({.id = Formulation::mpm_fem,
                   .name = "mpm-fem",
                   .paper = "seed 004",

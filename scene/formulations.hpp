@@ -36,7 +36,9 @@ struct Problem {
 
 /// What a run of a formulation costs, for the estimates made before it starts (scene/budget.hpp):
 /// lower bounds of its memory (peak RSS less the program's, bench/ and docs/verification.md,
-/// "Resource estimates") and its speed on the 2-core bench machine, one thread.
+/// "Resource estimates") and its speed on the 2-core bench machine, one thread. The coupled rows'
+/// µs per particle-step are measured (each cites its bench/results file); `auto` compares them
+/// (scene/auto_formulation.hpp). The per-node costs are rough: no bench separates them yet.
 struct Cost {
   double bytes_per_point = 600.0;    // B per particle or water point
   double bytes_per_node = 60.0;      // B per node of the whole grid in 2D (the grid's fields)

@@ -96,6 +96,10 @@ const Table& scene_table() {
            .meaning = "A phase before t = 0 that brings the bodies to equilibrium under gravity, see "
                       "[initialisation](#initialisation).",
            .default_text = "none"},
+          {.name = "formulation_choice", .type = Type::object,
+           .meaning = "Written by preprocess into `RUN_DIR/scene.json` when `formulation` was `auto`: how it chose "
+                      "(`chosen`, `rule`, `reason`, `estimates`), echoed into `run.json`; a scene file leaves it out.",
+           .default_text = "none"},
       }};
   return t;
 }

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "scene/auto_formulation.hpp"
 #include "scene/budget.hpp"
 #include "scene/formulations.hpp"
 #include "scene/input.hpp"
@@ -48,9 +49,31 @@ Scene SceneParser::parse() {
   parse_output(top.ok("output") ? top.get("output") : json::object(), top.at("output"));
   parse_solver(top.ok("solver") ? top.get("solver") : json::object(), top.at("solver"));
   if (top.ok("formulation")) resolve_formulation(top.str("formulation"), top.at("formulation"));
+  // The resolved scene.json of a run directory: how "auto" chose, kept for solve's log and run.json.
+  if (root_.contains("formulation_choice") && root_["formulation_choice"].is_object()) {
+    const json& fc = root_["formulation_choice"];
+    const bool recorded = fc.contains("chosen") && fc["chosen"] == to_string(s_.formulation) &&
+                          fc.contains("reason") && fc["reason"].is_string() && s_.formulation_choice.is_null();
+    if (!recorded) {
+      c_.error(top.at("formulation_choice"), "got " + shown(fc) + ", expected the record preprocess writes of how \"auto\" "
+                                             "chose formulation " + in_quotes(to_string(s_.formulation)) +
+                                             " (a scene file leaves it out)");
+    } else {
+      s_.formulation_choice = fc;
+      if (fc.contains("automatic") && fc["automatic"] == true) s_.formulation_reason = fc["reason"].get<std::string>();
+    }
+  }
+  // A key the formulation does not read, where "auto" chose it: the message says so, and how to choose.
+  const std::string chosen_note =
+      s_.formulation_choice.is_object() && !root_.contains("formulation_choice")
+          ? " (formulation " + in_quotes(to_string(s_.formulation)) + " was chosen automatically by \"auto\", rule \"" +
+                s_.formulation_choice.value("rule", std::string()) +
+                "\"; `swmpm preprocess --explain` says why; name a formulation in /formulation to use this key)"
+          : std::string();
   for (const auto& at : water_monitors_)
     if (s_.formulation != Formulation::automatic && !row_of(s_.formulation).water.fluid_particles)
-      c_.error(at, "got \"water\", but only the double-point formulations have water points; expected \"soil\"");
+      c_.error(at, "got \"water\", but only the double-point formulations have water points; expected \"soil\"" +
+                       chosen_note);
   // A water_level gauge reads the liquid points (double-point) or the grid's phase field (mpm-fem).
   const auto has_liquid = [](const WaterLayout& w) { return w.fluid_particles || w.free_water_on_grid; };
   if (s_.formulation != Formulation::automatic && s_.has_fluid() && !has_liquid(row_of(s_.formulation).water)) {
@@ -64,7 +87,7 @@ Scene SceneParser::parse() {
   // Formulation-specific switches against the formulation's row (scene/formulations.hpp): refused
   // where the formulation does not read them or lacks the value; unset ones take the row's default.
   if (s_.formulation != Formulation::automatic) {
-    for (const Problem& p : check_formulation(root_, s_)) c_.error(p.path, p.message);
+    for (const Problem& p : check_formulation(root_, s_)) c_.error(p.path, p.message + chosen_note);
     apply_formulation_defaults(s_);
   }
   if (top.ok("initialisation")) parse_initialisation(top.get("initialisation"), top.at("initialisation"), top);
@@ -761,11 +784,16 @@ void SceneParser::resolve_formulation(const std::string& name, const std::string
   }
   const bool fluid = !fluid_body_path.empty();
   if (f == Formulation::automatic) {
-    s_.formulation = fluid ? Formulation::explicit_single_point : Formulation::dry;
-    s_.formulation_reason =
-        fluid ? "body \"" + fluid_body + "\" has a fluid, so the scene is coupled soil-water; \"auto\" "
-                "picks \"explicit-single-point\", the general explicit coupled scheme"
-              : "no body has a fluid, so the scene is dry; \"auto\" picks \"dry\" (solid phase only)";
+    // The materials, bodies, grid and time are parsed; a scene whose errors so far leave them
+    // incomplete is reported as it is, with the formulation left to a scene without errors.
+    if (!c_.errors.empty()) {
+      s_.formulation = fluid ? Formulation::explicit_single_point : Formulation::dry;
+      return;
+    }
+    const FormulationChoice choice = choose_formulation(s_);
+    s_.formulation = choice.chosen;
+    s_.formulation_reason = choice.reason;
+    s_.formulation_choice = to_json(choice);
     return;
   }
   s_.formulation = f;

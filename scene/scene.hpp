@@ -236,6 +236,10 @@ struct Scene {
   int dimension = 2;
   Formulation formulation = Formulation::dry;
   std::string formulation_reason;  // why "auto" picked what it picked
+  /// How "auto" chose (scene/auto_formulation.hpp, to_json): {"chosen", "automatic", "rule",
+  /// "reason", "estimates"}; null when the scene file named its formulation. The resolved
+  /// scene.json carries it, so that solve can log it and write it to run.json.
+  nlohmann::json formulation_choice;
   Vec3 gravity{0, 0, 0};           // m/s^2
   double gravity_ramp = 0.0;       // s
   Grid grid;

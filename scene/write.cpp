@@ -76,6 +76,7 @@ nlohmann::json to_json(const Scene& s) {
   j["name"] = s.name;
   j["dimension"] = dim;
   j["formulation"] = to_string(s.formulation);
+  if (s.formulation_choice.is_object()) j["formulation_choice"] = s.formulation_choice;  // "auto": how it chose
   j["gravity"] = vec_json(s.gravity, dim);
   j["gravity_ramp"] = s.gravity_ramp;
   j["grid"] = {{"cell_size", s.grid.cell_size},

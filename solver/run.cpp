@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scene/auto_formulation.hpp"
 #include "scene/budget.hpp"
 #include "scene/expression.hpp"
 #include "scene/files.hpp"
@@ -103,10 +104,11 @@ bool solve_output(const std::string& relative) {
 
 /// run.json while the run goes on: status `running`. Padded to 8 KiB, so that the final run.json
 /// can overwrite it in place when the disk has no room for a new file.
-std::string running_report(const std::string& formulation) {
+std::string running_report(const std::string& formulation, const nlohmann::json& choice) {
   nlohmann::ordered_json rj;
   rj["status"] = "running";
   rj["formulation"] = formulation;
+  rj["formulation_choice"] = choice;  // how "auto" chose, before the first step (scene/auto_formulation.hpp)
   rj["pid"] = static_cast<long>(::getpid());
   rj["started_unix_seconds"] = static_cast<long>(std::time(nullptr));
   rj["software_version"] = version;
@@ -461,7 +463,7 @@ class Runner {
     run_dir_.claim("log.txt");
     if (resume_) log_.open_to_append(dir_ / "log.txt");
     else log_.open(dir_ / "log.txt");
-    run_dir_.write_text("run.json", running_report(f_->name()), true);
+    run_dir_.write_text("run.json", running_report(f_->name(), scene::choice_of(scene_)), true);
     run_dir_.claim("monitors.csv");
     std::filesystem::create_directories(dir_ / "output");
     const std::string stamp = "# swmpm " + std::string(version) + " (" + git_hash + "), scene " + scene_.name +
@@ -478,6 +480,7 @@ class Runner {
               std::to_string(state_.solid.size()) + " solid particles" +
               (state_.fluid.size() ? ", " + std::to_string(state_.fluid.size()) + " water points" : std::string()) +
               ", " + std::to_string(threads_) + " threads");
+    for (const auto& l : scene::explain_lines(scene::choice_of(scene_))) log_.line(l);
     for (const auto& l : monitors_->describe(state_)) log_.line(l);
     const double dt_crit = dt_crit0_;
     if (clock_.auto_dt) {
@@ -953,6 +956,8 @@ class Runner {
       rj["failed_node"] = {{"index", state_.health.node}, {"position", std::vector<double>(x.begin(), x.begin() + Dim)}};
     }
     rj["formulation"] = f_->name();
+    rj["formulation_reason"] = scene_.formulation_reason;
+    rj["formulation_choice"] = scene::choice_of(scene_);
     rj["dimension"] = Dim;
     rj["shape_function"] = scene::to_string(scene_.grid.shape_function);
     rj["particles"] = {{"solid", state_.solid.size()}};

@@ -239,6 +239,8 @@ TEST(Scene, Valid3DParsesWithDefaults) {
   EXPECT_EQ(s.solver.stabilisation.fbar, "modified");
 }
 
+// Its fixed dt (1e-5 s) is below both single-point limits: the same steps, so the cheaper step
+// (tests/unit/test_auto_formulation.cpp has the rest of "auto").
 TEST(Scene, AutoFormulationWithFluidPicksExplicitSinglePoint) {
   json j = scene_2d();
   j["formulation"] = "auto";
