@@ -10,8 +10,9 @@ frame`:
 - the runout: the largest x of a soil point plus half a spacing [mm];
 - the pressure's checkerboard index: the RMS deviation of each value from the least-squares plane
   through its neighbours within 1.6 spacings, over the field's range (the same definition as the
-  run's own stability indicators, docs/verification.md). mpm-fem: the grid nodes with phi >= 1/2;
-  explicit-double-point: the liquid points. The hydrostatic gradient is a plane and does not count.
+  run's own stability indicators, docs/verification.md, read from run.json when the run has them).
+  mpm-fem: the grid nodes with phi >= 1/2; explicit-double-point: the liquid points. The
+  hydrostatic gradient is a plane and does not count.
 Prints Markdown tables. Needs only the swmpm on PATH (or $SWMPM).
 """
 import csv
@@ -100,26 +101,26 @@ def solve3(a, b):
 
 
 def pressure_index(run):
-    formulation = ""
+    """The pressure checkerboard index at each of TIMES: the run's own (run.json "stability", swmpm
+    from 2026-12-05 on), else computed here from mpm-fem's grid frames."""
+    import json
     with open(os.path.join(run, "run.json")) as f:
-        for line in f:
-            if '"formulation"' in line:
-                formulation = line.split(":")[1].strip().strip('",')
-                break
+        r = json.load(f)
+    formulation = r.get("formulation", "")
+    frames = r.get("stability", {}).get("frames", {})
+    if frames.get("pressure_checkerboard"):
+        ts, cb = frames["time"], frames["pressure_checkerboard"]
+        return formulation, [cb[min(range(len(ts)), key=lambda k: abs(ts[k] - t))] for t in TIMES]
+    if formulation != "mpm-fem":
+        return formulation, [float("nan")] * len(TIMES)
     out = []
     for t in TIMES:
-        if formulation == "mpm-fem":
-            _, rows = frame(run, t, "grid")
-            rows = [r for r in rows if float(r["phase_field"]) >= 0.5]
-            xs = sorted({round(float(r["x"]), 9) for r in rows})
-            gaps = sorted(b - a for a, b in zip(xs, xs[1:]))
-            spacing = gaps[len(gaps) // 2]
-        else:
-            _, rows = frame(run, t, "fluid")
-            spacing = 2 * max(float(r["half_size_x"]) for r in rows)
+        _, rows = frame(run, t, "grid")
+        rows = [r for r in rows if float(r["phase_field"]) >= 0.5]
+        xs = sorted({round(float(r["x"]), 9) for r in rows})
+        gaps = sorted(b - a for a, b in zip(xs, xs[1:]))
         pts = [(float(r["x"]), float(r["y"])) for r in rows]
-        out.append(checkerboard(pts, [float(r["pressure"] if "pressure" in r else r["pore_pressure"]) for r in rows],
-                                spacing))
+        out.append(checkerboard(pts, [float(r["pressure"]) for r in rows], gaps[len(gaps) // 2]))
     return formulation, out
 
 

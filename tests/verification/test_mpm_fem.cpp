@@ -239,3 +239,26 @@ TEST(MpmFem, GaugeThatNeverSeesWaterPlotsAnEmptyPanel) {
   EXPECT_EQ(plot.status, 0) << plot.err;
   EXPECT_TRUE(std::filesystem::exists(run + "/plots/gauge_2a.png"));
 }
+
+// D2, Rondon's underwater column (examples/underwater-collapse-mpm-fem), its first 0.25 s at the
+// example's dt of 5e-5 s (5,000 steps, about 10 minutes on one thread). The 2 s run of 2026-12-05
+// (the example's README) had at 0.25 s its farthest soil point at 61.32 mm (the face at 60 mm)
+// and the top of the face's last column (x in [55, 57.5] mm) at 44.66 mm (47.5 at t = 0); no
+// pressure checkerboard (0.002-0.003 over the run against the threshold 0.1).
+TEST(MpmFem, SlowD2UnderwaterCollapseFirstQuarterSecond) {
+  json s = load_json(SWMPM_SOURCE_DIR "/examples/underwater-collapse-mpm-fem/scene.json");
+  s["time"]["end"] = 0.25;
+  const std::string run = run_scene(s, "mpmfem-d2");
+  const auto soil = last_frame(run, "solid");
+  double runout = 0.0, top = 0.0;
+  for (const auto& x : soil.points) {
+    runout = std::max(runout, x[0]);
+    if (x[0] >= 0.055 && x[0] < 0.0575) top = std::max(top, x[1]);
+  }
+  std::printf("D2 at 0.25 s: farthest soil point %.2f mm, top of the face's column %.2f mm\n", 1e3 * runout, 1e3 * top);
+  EXPECT_NEAR(runout, 0.06132, 3e-4);
+  EXPECT_NEAR(top, 0.04466, 3e-4);
+  const json r = load_json(run + "/run.json");
+  EXPECT_LT(r["stability"]["worst"]["pressure_checkerboard"]["value"].get<double>(), 0.1);
+  EXPECT_LT(std::abs(r["counters"]["water volume corrected"].get<double>()), 0.1);  // per cent
+}
