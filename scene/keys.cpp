@@ -593,7 +593,7 @@ const Table& solver_table() {
           {.name = "soil_substeps", .type = Type::integer, .def = 1, .range = closed(1, 1000),
            .meaning = "mpm-fem only: soil steps per step of the fluid and the phase field (multi-rate). The "
                       "soil's explicit step is limited by its P-wave speed, the Eulerian water's by its flow "
-                      "(h/|v|), the soil–fluid coupling and the phase field's reaction, often tens of times "
+                      "(h over its speed), the soil–fluid coupling and the phase field's reaction, often tens of times "
                       "longer; with k substeps the fluid advances once by the time the soil reaches after k "
                       "steps and the soil takes its pressure and drag meanwhile. dt auto keeps the fluid's "
                       "limits for k Δt. 1 is the seed's scheme (docs/formulations.md, \"Multi-rate\")."},
