@@ -262,3 +262,24 @@ TEST(MpmFem, SlowD2UnderwaterCollapseFirstQuarterSecond) {
   EXPECT_LT(r["stability"]["worst"]["pressure_checkerboard"]["value"].get<double>(), 0.1);
   EXPECT_LT(std::abs(r["counters"]["water volume corrected"].get<double>()), 0.1);  // per cent
 }
+
+// D4, the subaerial slide (examples/subaerial-slide-mpm-fem/scene-coarse.json, 10 mm cells), to
+// 0.8 s with three soil steps per fluid step (solver.soil_substeps = 3): gauge G1's first crest.
+// The single-rate run to 1.6 s (the example's README) and the k = 3 run of 2026-12-05 both put it
+// at 0.1691 m at 0.622 s (still water 0.1503 m); k = 8 gave 0.1634 m, which this test refuses.
+TEST(MpmFem, SlowD4SubaerialSlideFirstWaveAtG1) {
+  json s = load_json(SWMPM_SOURCE_DIR "/examples/subaerial-slide-mpm-fem/scene-coarse.json");
+  s["time"]["end"] = 0.8;
+  s["solver"]["soil_substeps"] = 3;
+  const auto mon = read_monitors(run_scene(s, "mpmfem-d4"));
+  const auto& t = mon.column("time");
+  const auto& h = mon.column("G1.water_level");
+  const double still = h.front();
+  std::size_t crest = 0;
+  for (std::size_t r = 1; r + 1 < h.size() && crest == 0; ++r)
+    if (h[r] >= h[r - 1] && h[r] > h[r + 1] && h[r] > still + 0.002) crest = r;
+  ASSERT_GT(crest, 0u) << "no crest 2 mm above still water at G1";
+  std::printf("D4 G1: still water %.4f m, first crest %.4f m at %.3f s\n", still, h[crest], t[crest]);
+  EXPECT_NEAR(h[crest], 0.1691, 0.001);
+  EXPECT_NEAR(t[crest], 0.622, 0.02);
+}
