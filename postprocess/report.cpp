@@ -1,14 +1,20 @@
-// report: RUN_DIR/report.md, one page that says what was run, what it cost, how it compares with
-// the references given, and shows the plots. Reads scene.json and run.json as JSON (not through the
-// scene parser) so a report can still be written for a run made by an older or newer version.
+// report: RUN_DIR/report.md and RUN_DIR/report.html, one page that says what was run, which
+// formulation ran and why, what it cost, how stable it stayed (the run's own indicators), how it
+// compares with the references given, and shows the monitors and the fields at the last frame.
+// The two files hold the same page: report.md links the PNGs in plots/, report.html embeds them
+// (base64 data URIs, VTK's encoder) so that it is one self-contained file to send or archive.
+// Reads scene.json and run.json as JSON (not through the scene parser) so a report can still be
+// written for a run made by an older or newer version.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
+#include <vtkBase64Utilities.h>
 
 #include "postprocess/format.hpp"
 #include "postprocess/postprocess.hpp"
@@ -28,17 +34,10 @@ json load(const fs::path& path) {
   return scene::read_json_file(path.string(), "JSON file");
 }
 
-/// A string for a Markdown table cell: '|' would end the cell.
-std::string cell(const std::string& s) {
-  std::string out;
-  for (char c : s) out += c == '|' ? std::string("\\|") : std::string(1, c);
-  return out;
-}
-
 /// A JSON value as a person reads it: numbers with 6 digits, arrays as (a, b), strings bare.
 std::string text(const json& v) {
   if (v.is_number()) return num(v.get<double>());
-  if (v.is_string()) return cell(v.get<std::string>());
+  if (v.is_string()) return v.get<std::string>();
   if (v.is_array()) {
     std::string s = "(";
     for (std::size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + text(v[k]);
@@ -50,71 +49,237 @@ std::string text(const json& v) {
 
 std::string get(const json& j, const std::string& key) { return j.contains(key) ? text(j[key]) : "—"; }
 
-void setup_section(std::ostream& md, const json& scene, const json& run) {
+/// "4.2 s", "3.1 min", "1.5 h".
+std::string duration(double seconds) {
+  if (seconds < 120.0) return num(seconds, 3) + " s";
+  if (seconds < 7200.0) return num(seconds / 60.0, 3) + " min";
+  return num(seconds / 3600.0, 3) + " h";
+}
+
+std::string html_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+/// Escaped text with `code` spans (the only markup the page's text uses) as <code>.
+std::string html_inline(const std::string& s) {
+  std::string out;
+  bool code = false;
+  std::size_t from = 0;
+  for (std::size_t k = s.find('`'); k != std::string::npos; k = s.find('`', from)) {
+    out += html_escape(s.substr(from, k - from)) + (code ? "</code>" : "<code>");
+    code = !code;
+    from = k + 1;
+  }
+  out += html_escape(s.substr(from));
+  return code ? out + "</code>" : out;
+}
+
+/// A Markdown table cell: '|' would end the cell, a newline the row.
+std::string md_cell(const std::string& s) {
+  std::string out;
+  for (char c : s) out += c == '|' ? std::string("\\|") : c == '\n' ? std::string(" ") : std::string(1, c);
+  return out;
+}
+
+std::string base64(const std::string& bytes) {
+  std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
+  const auto n = vtkBase64Utilities::Encode(reinterpret_cast<const unsigned char*>(bytes.data()),
+                                            static_cast<unsigned long>(bytes.size()),
+                                            reinterpret_cast<unsigned char*>(out.data()));
+  out.resize(n);
+  return out;
+}
+
+using Rows = std::vector<std::vector<std::string>>;
+
+/// One page written twice as it is built: Markdown and HTML.
+class Page {
+ public:
+  explicit Page(fs::path dir) : dir_(std::move(dir)) {}
+
+  void heading(int level, const std::string& s) {
+    md_ << std::string(static_cast<std::size_t>(level), '#') << " " << s << "\n\n";
+    html_ << "<h" << level << ">" << html_inline(s) << "</h" << level << ">\n";
+  }
+  void paragraph(const std::string& s) {
+    md_ << s << "\n\n";
+    html_ << "<p>" << html_inline(s) << "</p>\n";
+  }
+  /// A table; an all-empty header gives a two-column key–value table.
+  void table(const std::vector<std::string>& header, const Rows& rows) {
+    md_ << "|";
+    for (const auto& h : header) md_ << " " << md_cell(h) << " |";
+    md_ << "\n|";
+    for (std::size_t k = 0; k < header.size(); ++k) md_ << "---|";
+    md_ << "\n";
+    for (const auto& r : rows) {
+      md_ << "|";
+      for (const auto& c : r) md_ << " " << md_cell(c) << " |";
+      md_ << "\n";
+    }
+    md_ << "\n";
+    const bool headed = std::any_of(header.begin(), header.end(), [](const std::string& h) { return !h.empty(); });
+    html_ << "<table>\n";
+    if (headed) {
+      html_ << "<tr>";
+      for (const auto& h : header) html_ << "<th>" << html_inline(h) << "</th>";
+      html_ << "</tr>\n";
+    }
+    for (const auto& r : rows) {
+      html_ << "<tr>";
+      for (std::size_t k = 0; k < r.size(); ++k)
+        html_ << (!headed && k == 0 ? "<th>" : "<td>") << html_inline(r[k]) << (!headed && k == 0 ? "</th>" : "</td>");
+      html_ << "</tr>\n";
+    }
+    html_ << "</table>\n";
+  }
+  /// A PNG of the run directory: linked in Markdown, embedded in HTML.
+  void image(const std::string& caption, const fs::path& png) {
+    const std::string rel = fs::relative(png, dir_).string();
+    md_ << "![" << caption << "](" << rel << ")\n\n";
+    std::ifstream in(png, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in.good() && !in.eof()) throw std::runtime_error(png.string() + ": cannot be read for report.html");
+    html_ << "<figure><img alt=\"" << html_escape(caption) << "\" src=\"data:image/png;base64," << base64(bytes)
+          << "\"><figcaption>" << html_inline(caption) << " (<code>" << html_escape(rel)
+          << "</code>)</figcaption></figure>\n";
+  }
+
+  std::string markdown() const { return md_.str(); }
+  std::string html(const std::string& title) const {
+    std::ostringstream h;
+    h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" << html_escape(title)
+      << "</title>\n<style>\n"
+      << "body { font-family: sans-serif; max-width: 60em; margin: 2em auto; padding: 0 1em; color: #222; }\n"
+      << "table { border-collapse: collapse; margin: 0.5em 0 1em; font-size: 0.9em; }\n"
+      << "th, td { border: 1px solid #bbb; padding: 0.2em 0.5em; text-align: left; vertical-align: top; }\n"
+      << "th { background: #eee; }\n"
+      << "figure { display: inline-block; margin: 0.5em; }\n"
+      << "img { max-width: 100%; border: 1px solid #ddd; }\n"
+      << "figcaption { font-size: 0.85em; color: #555; }\n"
+      << "code { background: #f4f4f4; padding: 0 0.2em; }\n"
+      << "</style>\n</head>\n<body>\n"
+      << html_.str() << "</body>\n</html>\n";
+    return h.str();
+  }
+
+ private:
+  fs::path dir_;
+  std::ostringstream md_, html_;
+};
+
+void setup_section(Page& page, const json& scene, const json& run) {
   const int dim = scene.value("dimension", run.value("dimension", 2));
-  md << "## Setup\n\n| | |\n|---|---|\n"
-     << "| scene | " << get(scene, "name") << " |\n"
-     << "| formulation | " << get(run.contains("formulation") ? run : scene, "formulation") << " |\n"
-     << "| dimension | " << dim << (dim == 2 ? " (plane strain; extensive quantities per metre)" : "") << " |\n";
+  Rows rows{{"scene", get(scene, "name")},
+            {"formulation", get(run.contains("formulation") ? run : scene, "formulation")},
+            {"dimension", std::to_string(dim) + (dim == 2 ? " (plane strain; extensive quantities per metre)" : "")}};
   if (scene.contains("grid")) {
     const auto& g = scene["grid"];
-    md << "| shape function | " << get(g, "shape_function") << " |\n";
+    rows.push_back({"shape function", get(g, "shape_function")});
     std::string cells;
     if (g.contains("min") && g.contains("max") && g.contains("cell_size")) {
       const double h = g["cell_size"].get<double>();
       for (std::size_t a = 0; a < g["min"].size(); ++a)
         cells += (a ? " × " : "") + std::to_string(std::lround((g["max"][a].get<double>() - g["min"][a].get<double>()) / h));
     }
-    md << "| grid | cell size " << get(g, "cell_size") << " m, from " << get(g, "min") << " to " << get(g, "max")
-       << " m, " << cells << " cells";
-    if (run.contains("active_cells")) md << ", " << get(run, "active_cells") << " holding particles";
-    md << " |\n";
+    std::string grid = "cell size " + get(g, "cell_size") + " m, from " + get(g, "min") + " to " + get(g, "max") +
+                       " m, " + cells + " cells";
+    if (run.contains("active_cells")) grid += ", " + get(run, "active_cells") + " holding particles";
+    rows.push_back({"grid", grid});
   }
   if (run.contains("particles") && run["particles"].is_object()) {
-    md << "| particles |";
-    for (const auto& [phase, n] : run["particles"].items()) md << " " << phase << " " << text(n);
-    md << " |\n";
+    std::string p;
+    for (const auto& [phase, n] : run["particles"].items()) p += (p.empty() ? "" : ", ") + phase + " " + text(n);
+    rows.push_back({"particles", p});
   }
-  md << "| gravity | " << get(scene, "gravity") << " m/s²";
-  if (scene.value("gravity_ramp", 0.0) > 0.0) md << ", ramped over " << get(scene, "gravity_ramp") << " s";
-  md << " |\n";
+  std::string gravity = get(scene, "gravity") + " m/s²";
+  if (scene.value("gravity_ramp", 0.0) > 0.0) gravity += ", ramped over " + get(scene, "gravity_ramp") + " s";
+  rows.push_back({"gravity", gravity});
   if (scene.contains("time")) {
     const auto& t = scene["time"];
-    md << "| time | end " << get(t, "end") << " s, dt " << get(t, "dt");
-    if (t.contains("cfl") && t.value("dt", json()).is_string()) md << " (cfl " << get(t, "cfl") << ")";  // auto
-    md << " |\n";
+    std::string time = "end " + get(t, "end") + " s, dt " + get(t, "dt");
+    if (t.contains("cfl") && t.value("dt", json()).is_string()) time += " (cfl " + get(t, "cfl") + ")";  // auto
+    rows.push_back({"time", time});
   }
+  page.heading(2, "Setup");
+  page.table({"", ""}, rows);
   if (scene.contains("materials")) {
-    md << "\nMaterials:\n\n| name | model | parameters |\n|---|---|---|\n";
+    Rows m_rows;
     for (const auto& m : scene["materials"]) {
       std::string params;
       for (const auto& [key, value] : m.items())
         if (key != "name" && key != "model") params += (params.empty() ? "" : ", ") + key + " " + text(value);
-      md << "| " << get(m, "name") << " | " << get(m, "model") << " | " << params << " |\n";
+      m_rows.push_back({get(m, "name"), get(m, "model"), params});
     }
+    page.paragraph("Materials:");
+    page.table({"name", "model", "parameters"}, m_rows);
   }
   if (scene.contains("bodies")) {
-    md << "\nBodies:\n\n| name | geometry | solid | fluid | particles per cell |\n|---|---|---|---|---|\n";
-    for (const auto& b : scene["bodies"])
-      md << "| " << get(b, "name") << " | " << (b.contains("geometry") ? get(b["geometry"], "type") : "—") << " | "
-         << get(b, "solid") << " | " << get(b, "fluid") << " | " << get(b, "particles_per_cell") << " |\n";
+    Rows b_rows;
+    for (const auto& b : scene["bodies"]) {
+      std::string geometry = b.contains("geometry") ? get(b["geometry"], "type") : "—";
+      if (b.contains("geometry") && b["geometry"].contains("file")) geometry += " " + get(b["geometry"], "file");
+      b_rows.push_back({get(b, "name"), geometry, get(b, "solid"), get(b, "fluid"), get(b, "particles_per_cell")});
+    }
+    page.paragraph("Bodies:");
+    page.table({"name", "geometry", "solid", "fluid", "particles per cell"}, b_rows);
   }
 }
 
-void cost_section(std::ostream& md, const json& run) {
-  md << "\n## Cost\n\n| | |\n|---|---|\n"
-     << "| status | " << get(run, "status") << (run.contains("diagnosis") ? " — " + get(run, "diagnosis") : "") << " |\n"
-     << "| steps | " << get(run, "steps") << " to t = " << get(run, "end_time") << " s |\n"
-     << "| dt | " << get(run, "dt") << " s (mean; min " << get(run, "dt_min") << ", max " << get(run, "dt_max")
-     << "), limited by " << get(run, "dt_limit") << " |\n"
-     << "| wall time | " << get(run, "wall_seconds") << " s (time loop " << get(run, "loop_seconds") << " s) |\n"
-     << "| µs per particle-step | " << get(run, "us_per_particle_step") << " (time loop "
-     << get(run, "loop_us_per_particle_step") << ") |\n"
-     << "| threads | " << get(run, "threads") << " |\n";
+/// Which formulation ran and why: named in the scene, or chosen by "auto" with both estimates.
+void formulation_section(Page& page, const json& run) {
+  page.heading(2, "Formulation");
+  const json choice = run.value("formulation_choice", json());
+  const std::string ran = get(run, "formulation");
+  if (!choice.is_object() || !choice.value("automatic", false)) {
+    page.paragraph("`" + ran + "`, as the scene file names it." +
+                   (run.contains("formulation_reason") && !get(run, "formulation_reason").empty() &&
+                            get(run, "formulation_reason") != "—"
+                        ? " " + get(run, "formulation_reason")
+                        : ""));
+    return;
+  }
+  page.paragraph("`" + ran + "`, chosen by `\"formulation\": \"auto\"` before the first step: " +
+                 choice.value("reason", std::string("(no reason recorded)")));
+  const json estimates = choice.value("estimates", json::array());
+  if (!estimates.is_array() || estimates.empty()) return;
+  Rows rows;
+  for (const auto& e : estimates)
+    rows.push_back({get(e, "formulation"), get(e, "dt"), get(e, "steps"), get(e, "us_per_point_step"),
+                    e.contains("wall_seconds") && e["wall_seconds"].is_number() ? duration(e["wall_seconds"].get<double>()) : "—",
+                    get(e, "dt_reason")});
+  page.paragraph("The estimates it compared (one thread; µs per point-step as measured on the bench machine):");
+  page.table({"formulation", "dt [s]", "steps", "µs per point-step", "estimated wall time", "step limited by"}, rows);
+  if (run.contains("wall_seconds") && run["wall_seconds"].is_number())
+    page.paragraph("This run took " + duration(run["wall_seconds"].get<double>()) + " on " + get(run, "threads") +
+                   " thread(s).");
+}
+
+void cost_section(Page& page, const json& run) {
+  Rows rows{{"status", get(run, "status") + (run.contains("diagnosis") ? " — " + get(run, "diagnosis") : "")},
+            {"steps", get(run, "steps") + " to t = " + get(run, "end_time") + " s"},
+            {"dt", get(run, "dt") + " s (mean; min " + get(run, "dt_min") + ", max " + get(run, "dt_max") +
+                       "), limited by " + get(run, "dt_limit")},
+            {"wall time", get(run, "wall_seconds") + " s (time loop " + get(run, "loop_seconds") + " s)"},
+            {"µs per particle-step",
+             get(run, "us_per_particle_step") + " (time loop " + get(run, "loop_us_per_particle_step") + ")"},
+            {"threads", get(run, "threads")}};
   if (run.contains("peak_memory_bytes"))
-    md << "| peak memory | " << num(run["peak_memory_bytes"].get<double>() / (1024.0 * 1024.0), 4) << " MiB |\n";
-  md << "| frames | " << get(run, "frames") << " |\n"
-     << "| software | swmpm " << get(run, "software_version") << " (" << get(run, "git_hash") << ") |\n";
+    rows.push_back({"peak memory", num(run["peak_memory_bytes"].get<double>() / (1024.0 * 1024.0), 4) + " MiB"});
+  rows.push_back({"frames", get(run, "frames")});
+  rows.push_back({"software", "swmpm " + get(run, "software_version") + " (" + get(run, "git_hash") + ")"});
+  page.heading(2, "Cost");
+  page.table({"", ""}, rows);
   if (run.contains("stage_seconds") && run["stage_seconds"].is_object() && !run["stage_seconds"].empty()) {
     // Largest first: JSON objects come back in key order, which says nothing about cost.
     std::vector<std::pair<double, std::string>> stages;
@@ -128,31 +293,122 @@ void cost_section(std::ostream& md, const json& run) {
     // frames and monitors and checks energy (a large share in small or frame-heavy runs).
     const double loop = run.contains("loop_seconds") ? run["loop_seconds"].get<double>() : total;
     const double whole = std::max(loop, total);
-    md << "\nWhere the time loop's time went (stages of the formulation, and the rest of the loop):\n\n"
-       << "| stage | seconds | share of the loop |\n|---|---|---|\n";
+    Rows s_rows;
     for (const auto& [seconds, stage] : stages)
-      md << "| " << cell(stage) << " | " << num(seconds, 4) << " | " << num(whole > 0 ? 100.0 * seconds / whole : 0.0, 3)
-         << " % |\n";
+      s_rows.push_back({stage, num(seconds, 4), num(whole > 0 ? 100.0 * seconds / whole : 0.0, 3) + " %"});
     if (whole > total)
-      md << "| frames, monitors, energy checks | " << num(whole - total, 4) << " | "
-         << num(100.0 * (whole - total) / whole, 3) << " % |\n";
+      s_rows.push_back({"frames, monitors, energy checks", num(whole - total, 4), num(100.0 * (whole - total) / whole, 3) + " %"});
+    page.paragraph("Where the time loop's time went (stages of the formulation, and the rest of the loop):");
+    page.table({"stage", "seconds", "share of the loop"}, s_rows);
   }
 }
 
-void comparison_section(std::ostream& md, const std::string& run_dir, const std::vector<ReferenceSpec>& refs) {
+/// The run's own stability indicators (run.json `stability`): per indicator its threshold, the
+/// worst value with its time and place, and how many frames crossed the threshold.
+void stability_section(Page& page, const json& run) {
+  page.heading(2, "Stability");
+  if (!run.contains("stability") || !run["stability"].is_object()) {
+    page.paragraph("run.json has no `stability` record (a run made before the indicators existed).");
+    return;
+  }
+  const json& st = run["stability"];
+  const json thresholds = st.value("thresholds", json::object());
+  const json worst = st.value("worst", json::object());
+  const json omitted = st.value("omitted", json::object());
+  const std::size_t frames = st.contains("frames") ? st["frames"].value("time", json::array()).size() : 0;
+  // In run.json's order (the reader's json sorts keys), then any indicator a newer version adds.
+  std::vector<std::string> keys{"pressure_checkerboard", "mean_stress_checkerboard", "energy_error",
+                                "spurious_velocity",     "porosity_min",             "porosity_max",
+                                "J_min",                 "J_max",                    "cavitation_fraction"};
+  for (const auto& [key, limit] : thresholds.items())
+    if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
+  Rows rows;
+  int crossed = 0;
+  for (const std::string& key : keys) {
+    if (!thresholds.contains(key)) continue;
+    const json& limit = thresholds[key];
+    std::string name = key;
+    std::replace(name.begin(), name.end(), '_', ' ');
+    std::string bound = "—";
+    if (limit.is_object() && !limit.empty()) bound = limit.begin().key() + " " + text(limit.begin().value());
+    if (omitted.contains(key)) {
+      rows.push_back({name, bound, "not measured", "", "", omitted[key].is_string() ? omitted[key].get<std::string>() : ""});
+      continue;
+    }
+    const json w = worst.value(key, json());
+    if (!w.is_object()) {
+      rows.push_back({name, bound, "—", "", "", ""});
+      continue;
+    }
+    const int n = w.value("crossed_frames", 0);
+    crossed += n > 0;
+    std::string where;
+    if (const json at = w.value("where", json()); at.is_object() && at.contains("set"))
+      where = get(at, "set") + " " + (at.contains("node") ? get(at, "node") : get(at, "particle")) + " at " + get(at, "position");
+    rows.push_back({name, bound, num(w.value("value", 0.0), 4), get(w, "time"), where,
+                    n > 0 ? "CROSSED in " + std::to_string(n) + " of " + std::to_string(frames) + " frames" : "within"});
+  }
+  page.paragraph(crossed == 0 ? "Every indicator stayed within its threshold over the " + std::to_string(frames) +
+                                    " frames (definitions: docs/verification.md, \"Stability indicators of every run\")."
+                              : std::to_string(crossed) + " indicator(s) crossed their threshold: read the results with "
+                                                          "care (definitions and what a crossing means: "
+                                                          "docs/verification.md, \"Stability indicators of every run\").");
+  page.table({"indicator", "threshold", "worst", "at t [s]", "where", "verdict"}, rows);
+}
+
+void comparison_section(Page& page, const std::string& run_dir, const std::vector<ReferenceSpec>& refs) {
   if (refs.empty()) return;
-  md << "\n## Comparison with references\n\n"
-     << "The monitor is interpolated linearly onto the reference times inside the run's time span. Relative L2 = "
-        "‖run − reference‖₂ / ‖reference‖₂.\n\n"
-     << "| monitor | reference | points | span [s] | relative L2 | max abs error (at t) | peak run (at t) | peak reference (at t) |\n"
-     << "|---|---|---|---|---|---|---|---|\n";
+  page.heading(2, "Comparison with references");
+  page.paragraph("The monitor is interpolated linearly onto the reference times inside the run's time span. "
+                 "Relative L2 = ‖run − reference‖₂ / ‖reference‖₂.");
+  Rows rows;
   for (const auto& r : refs) {
     const Comparison c = compare(run_dir, r.column, r.path);
-    md << "| " << c.monitor << " | " << c.reference << " | " << c.points << " | " << num(c.t_first) << " – "
-       << num(c.t_last) << " | " << num(c.rel_l2, 4) << " | " << num(c.max_abs, 4) << " (" << num(c.max_abs_time)
-       << ") | " << num(c.peak_run) << " (" << num(c.peak_run_time) << ") | " << num(c.peak_ref) << " ("
-       << num(c.peak_ref_time) << ") |\n";
+    rows.push_back({c.monitor, c.reference, std::to_string(c.points), num(c.t_first) + " – " + num(c.t_last),
+                    num(c.rel_l2, 4), num(c.max_abs, 4) + " (" + num(c.max_abs_time) + ")",
+                    num(c.peak_run) + " (" + num(c.peak_run_time) + ")", num(c.peak_ref) + " (" + num(c.peak_ref_time) + ")"});
   }
+  page.table({"monitor", "reference", "points", "span [s]", "relative L2", "max abs error (at t)", "peak run (at t)",
+              "peak reference (at t)"},
+             rows);
+}
+
+/// plots/field_*.png, by quantity, then by time as a number (0.5 before 10).
+std::vector<std::string> field_pictures(const fs::path& plots) {
+  std::vector<std::string> pngs;
+  if (fs::is_directory(plots))
+    for (const auto& e : fs::directory_iterator(plots))
+      if (e.path().extension() == ".png" && e.path().filename().string().rfind("field_", 0) == 0)
+        pngs.push_back(e.path().string());
+  auto key = [](const std::string& path) {
+    const std::string stem = fs::path(path).stem().string();
+    const auto cut = stem.rfind('_');
+    double t = 0.0;
+    try {
+      t = std::stod(stem.substr(cut + 1));
+    } catch (const std::exception&) {
+    }
+    return std::make_pair(stem.substr(0, cut), t);
+  };
+  std::sort(pngs.begin(), pngs.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
+  return pngs;
+}
+
+/// The last frame's pictures when the run has none yet: the soil's displacement and, when its
+/// points carry pore water, the pore pressure; a run of free water only (no soil points in its
+/// solid frames) shows its water points' speed.
+void draw_last_frame(const std::string& run_dir) {
+  const RunSeries solid(run_dir, "solid");
+  const double t_last = solid.frames().back().time;
+  const scene::PointCloud last = solid.load(solid.nearest_frame(t_last));
+  if (last.size() == 0) {
+    plot_fields(run_dir, "velocity_magnitude", {t_last}, "fluid");
+    return;
+  }
+  plot_fields(run_dir, "displacement_magnitude", {t_last});
+  const auto names = available_quantities(last);
+  if (std::find(names.begin(), names.end(), "pore_pressure") != names.end())
+    plot_fields(run_dir, "pore_pressure", {t_last});
 }
 
 }  // namespace
@@ -165,9 +421,10 @@ std::string write_report(const std::string& run_dir, const std::vector<Reference
   for (const auto& r : references) compare(run_dir, r.column, r.path);  // every error before any file is written
   files::RunDirectory ledger(dir);
   ledger.claim("report.md");  // refused up front when a report.md there is not swmpm's
+  ledger.claim("report.html");
 
-  // Plots: monitor plots when missing (always when references are to be overlaid), and the final
-  // displacement field when no field picture exists yet.
+  // Plots: monitor plots when missing (always when references are to be overlaid), and the last
+  // frame's fields when no field picture exists yet.
   const fs::path plots = dir / "plots";
   std::vector<std::string> monitor_pngs;
   if (fs::exists(dir / "monitors.csv")) {
@@ -180,59 +437,38 @@ std::string write_report(const std::string& run_dir, const std::vector<Reference
     }
     if (missing && !monitor_pngs.empty()) plot_monitors(run_dir, references);
   }
-  std::vector<std::string> field_pngs;
-  auto collect_fields = [&] {
-    field_pngs.clear();
-    if (fs::is_directory(plots))
-      for (const auto& e : fs::directory_iterator(plots))
-        if (e.path().extension() == ".png" && e.path().filename().string().rfind("field_", 0) == 0)
-          field_pngs.push_back(e.path().string());
-    // field_<quantity>_<t>.png: by quantity, then by time as a number (0.5 before 10).
-    auto key = [](const std::string& path) {
-      const std::string stem = fs::path(path).stem().string();
-      const auto cut = stem.rfind('_');
-      double t = 0.0;
-      try {
-        t = std::stod(stem.substr(cut + 1));
-      } catch (const std::exception&) {
-      }
-      return std::make_pair(stem.substr(0, cut), t);
-    };
-    std::sort(field_pngs.begin(), field_pngs.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
-  };
-  collect_fields();
+  std::vector<std::string> field_pngs = field_pictures(plots);
   if (field_pngs.empty() && fs::exists(dir / "output" / "results.pvd")) {
-    // The soil's displacement at the last frame; a run of free water only (no soil points in its
-    // solid frames) shows its water points' speed instead.
-    const RunSeries solid(run_dir, "solid");
-    const double t_last = solid.frames().back().time;
-    if (solid.load(solid.nearest_frame(t_last)).size() > 0) plot_fields(run_dir, "displacement_magnitude", {t_last});
-    else plot_fields(run_dir, "velocity_magnitude", {t_last}, "fluid");
-    collect_fields();
+    draw_last_frame(run_dir);
+    field_pngs = field_pictures(plots);
   }
 
-  const fs::path path = dir / "report.md";
-  std::ostringstream md;
-  md << "# Run report: " << get(scene, "name") << "\n\n"
-     << "Run directory `" << run_dir << "`. Everything below is read from its `scene.json`, `run.json`, "
-     << "`monitors.csv` and `output/`; units SI.\n\n";
-  setup_section(md, scene, run);
-  cost_section(md, run);
-  comparison_section(md, run_dir, references);
-  md << "\n## Plots\n\n";
-  for (const auto& png : monitor_pngs) {
-    const std::string rel = fs::relative(png, dir).string();
-    md << "- monitor `" << fs::path(png).stem().string() << "`: [" << rel << "](" << rel << ")\n";
+  const std::string title = "Run report: " + get(scene, "name");
+  Page page(dir);
+  page.heading(1, title);
+  page.paragraph("Run directory `" + run_dir + "`. Everything below is read from its `scene.json`, `run.json`, "
+                 "`monitors.csv` and `output/`; units SI.");
+  setup_section(page, scene, run);
+  formulation_section(page, run);
+  cost_section(page, run);
+  stability_section(page, run);
+  comparison_section(page, run_dir, references);
+  if (!monitor_pngs.empty()) {
+    page.heading(2, "Monitors");
+    for (const auto& png : monitor_pngs) page.image("monitor " + fs::path(png).stem().string(), png);
   }
-  for (const auto& png : field_pngs) {
-    const std::string rel = fs::relative(png, dir).string();
-    md << "- field `" << fs::path(png).stem().string().substr(6) << "`: [" << rel << "](" << rel << ")\n";
+  if (!field_pngs.empty()) {
+    page.heading(2, "Fields");
+    for (const auto& png : field_pngs) {
+      // field_<quantity>_<t>.png
+      const std::string stem = fs::path(png).stem().string().substr(6);
+      const auto cut = stem.rfind('_');
+      page.image(stem.substr(0, cut) + " at t = " + stem.substr(cut + 1) + " s", png);
+    }
   }
-  md << "\n";
-  for (const auto& png : monitor_pngs) md << "![" << fs::path(png).stem().string() << "](" << fs::relative(png, dir).string() << ")\n\n";
-  for (const auto& png : field_pngs) md << "![" << fs::path(png).stem().string() << "](" << fs::relative(png, dir).string() << ")\n\n";
-  ledger.write_text("report.md", md.str());
-  return path.string();
+  ledger.write_text("report.md", page.markdown());
+  ledger.write_text("report.html", page.html(title));
+  return (dir / "report.md").string();
 }
 
 }  // namespace swmpm::post

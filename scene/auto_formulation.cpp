@@ -11,12 +11,6 @@
 namespace swmpm::scene {
 namespace {
 
-std::string num(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", x);
-  return buf;
-}
-
 std::string quoted(Formulation f) {
   std::string q = "\"";  // (not "\"" + string: GCC 12's -Wrestrict false positive)
   q += to_string(f);

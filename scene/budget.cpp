@@ -13,13 +13,13 @@
 
 namespace swmpm::scene {
 
-namespace {
-
 std::string num(double x) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g", x);
   return buf;
 }
+
+namespace {
 
 /// The memory this process may have: the machine's (MemTotal), or less under an address-space
 /// limit (ulimit -v) or a cgroup's memory.max (a container, a batch job). 0: unknown.

@@ -26,6 +26,8 @@ struct MemoryLimit {
 MemoryLimit memory_limit(double max_memory);
 /// "8G", "512M", "2.5GB", "1e9" (bytes) -> bytes; throws std::invalid_argument.
 double parse_memory_size(const std::string& text);
+/// x with 3 significant digits ("%.3g"): "0.000133", "29.9", "3.15e+04".
+std::string num(double x);
 /// "1.2 GB", "340 MB", ...
 std::string format_bytes(double bytes);
 /// "3.2 h", "14 min", "40 s", "2.1 days", "3e+08 years".

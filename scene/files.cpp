@@ -260,7 +260,7 @@ std::vector<std::string> swmpm_files_in(const fs::path& dir) {
   auto add = [&](const std::string& rel) {
     if (fs::exists(fs::symlink_status(dir / rel, ec))) out.push_back(rel);
   };
-  for (const char* top : {"scene.json", "run.json", "log.txt", "monitors.csv", "report.md", "particles/solid.vtu",
+  for (const char* top : {"scene.json", "run.json", "log.txt", "monitors.csv", "report.md", "report.html", "particles/solid.vtu",
                           "particles/fluid.vtu", "particles/surfaces.vtu", "particles/phase_field.vtu",
                           "output/results.pvd"})
     add(top);

@@ -97,7 +97,7 @@ class Log {
 /// What a solve writes in its run directory; a new solve replaces these (swmpm's own, on the
 /// ledger) and keeps preprocess's scene.json and particles/.
 bool solve_output(const std::string& relative) {
-  return relative == "run.json" || relative == "log.txt" || relative == "monitors.csv" || relative == "report.md" ||
+  return relative == "run.json" || relative == "log.txt" || relative == "monitors.csv" || relative == "report.md" || relative == "report.html" ||
          relative == "checkpoint.bin" ||
          relative.rfind("output/", 0) == 0 || relative.rfind("plots/", 0) == 0;
 }
@@ -968,8 +968,9 @@ class Runner {
       rj["resumed_from_step"] = first_step_;
       rj["resumed_from_time"] = resume_->header.at("time");
     }
-    rj["dt"] = clock_.auto_dt ? (state_.step ? state_.time / static_cast<double>(state_.step) : 0.0)
-                              : *scene_.time.dt;  // mean for "auto"
+    // Mean for "auto", over the initialisation too (it starts at t_start < 0).
+    rj["dt"] = clock_.auto_dt ? (state_.step ? (state_.time - clock_.t_start) / static_cast<double>(state_.step) : 0.0)
+                              : *scene_.time.dt;
     rj["dt_min"] = state_.step ? clock_.dt_min : 0.0;
     rj["dt_max"] = clock_.dt_max;
     rj["dt_limit"] = dt_reason_;

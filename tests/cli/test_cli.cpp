@@ -371,5 +371,5 @@ TEST(RunCommand, FreeWaterOnlyRunEndsWithAReportOfTheWaterPoints) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(run / "plots" / "field_velocity_magnitude_0.01.png"));
   const std::string report = swmpm::testing::read_text((run / "report.md").string());
-  EXPECT_NE(report.find("field `velocity_magnitude_0.01`"), std::string::npos) << report;
+  EXPECT_NE(report.find("![velocity_magnitude at t = 0.01 s](plots/field_velocity_magnitude_0.01.png)"), std::string::npos) << report;
 }

@@ -13,6 +13,7 @@
 
 #include "solver/diagnostics/stability.hpp"
 #include "support/indicators.hpp"
+#include "support/locking_layer.hpp"
 #include "support/run_helpers.hpp"
 
 namespace {
@@ -152,20 +153,7 @@ std::vector<std::string> first_crossings(const std::string& text, const std::str
 // first crossing (t = 0.05 s); the end summary counts the frames that crossed (10 of 11); stderr
 // and log.txt both have them, and run.json the history.
 TEST(StabilityIndicators, LockedLayerWarnsOnceNamingIndicatorPlaceAndTimeThenSummarises) {
-  const json s = json::parse(R"({
-    "name": "locking", "dimension": 2, "formulation": "dry", "gravity": [0.0, 0.0],
-    "grid": { "cell_size": 0.25, "min": [0.0, 0.0], "max": [5.0, 5.5], "shape_function": "linear" },
-    "materials": [ { "name": "soil", "model": "hencky", "density": 2000.0, "youngs_modulus": 1.0e7,
-                     "poisson_ratio": 0.49 } ],
-    "bodies": [ { "name": "layer", "geometry": { "type": "box", "min": [0.0, 0.0], "max": [5.0, 5.0] },
-                  "solid": "soil", "particles_per_cell": 2 } ],
-    "boundaries": [ { "on": "x_min", "solid": "roller" }, { "on": "x_max", "solid": "roller" },
-                    { "on": "y_min", "solid": "fixed" } ],
-    "loads": [ { "type": "pressure", "body": "layer", "face": "y_max", "value": 3.0e4, "ramp": 0.25,
-                 "region": { "min": [0.0, 4.5], "max": [1.5, 5.0] } } ],
-    "time": { "end": 0.5, "dt": "auto", "cfl": 0.5 },
-    "output": { "interval": 0.05, "monitors": [ { "name": "centre", "at": [0.0, 5.0], "quantities": ["displacement_y"] } ] }
-  })");
+  const json s = swmpm::testing::locking_layer_scene();
   std::string run;
   const auto r = run_cli(s, "stab-locked", run);
   EXPECT_EQ(r.status, 0) << r.err;

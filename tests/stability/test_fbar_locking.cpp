@@ -12,6 +12,7 @@
 #include <cstdio>
 
 #include "support/indicators.hpp"
+#include "support/locking_layer.hpp"
 #include "support/run_helpers.hpp"
 
 namespace {
@@ -25,20 +26,8 @@ struct LockingRun {
 };
 
 LockingRun run_layer(const std::string& shape, const std::string& model, const std::string& fbar, const std::string& name) {
-  nlohmann::json s = nlohmann::json::parse(R"({
-    "name": "locking", "dimension": 2, "formulation": "dry", "gravity": [0.0, 0.0],
-    "grid": { "cell_size": 0.25, "min": [0.0, 0.0], "max": [5.0, 5.5], "shape_function": "linear" },
-    "materials": [ { "name": "soil", "model": "hencky", "density": 2000.0, "youngs_modulus": 1.0e7,
-                     "poisson_ratio": 0.49 } ],
-    "bodies": [ { "name": "layer", "geometry": { "type": "box", "min": [0.0, 0.0], "max": [5.0, 5.0] },
-                  "solid": "soil", "particles_per_cell": 2 } ],
-    "boundaries": [ { "on": "x_min", "solid": "roller" }, { "on": "x_max", "solid": "roller" },
-                    { "on": "y_min", "solid": "fixed" } ],
-    "loads": [ { "type": "pressure", "body": "layer", "face": "y_max", "value": 3.0e4, "ramp": 0.25,
-                 "region": { "min": [0.0, 4.5], "max": [1.5, 5.0] } } ],
-    "time": { "end": 0.5, "dt": "auto", "cfl": 0.5 },
-    "output": { "interval": 0.0, "monitors": [ { "name": "centre", "at": [0.0, 5.0], "quantities": ["displacement_y"] } ] }
-  })");
+  nlohmann::json s = swmpm::testing::locking_layer_scene();
+  s["output"]["interval"] = 0.0;
   s["grid"]["shape_function"] = shape;
   if (model == "tresca") {
     s["materials"][0] = {{"name", "soil"}, {"model", "mohr-coulomb"}, {"density", 2000.0}, {"youngs_modulus", 1.0e7},
