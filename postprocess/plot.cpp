@@ -370,9 +370,10 @@ namespace swmpm::post {
 void plot_loglog(const std::vector<ChartSeries>& series, const ChartLabels& labels, const std::string& png) {
   TempDir tmp;
   std::ostringstream gp;
-  gp << "set terminal pngcairo size 900,600 font 'Sans,10' noenhanced\n"
+  gp << "set terminal pngcairo size 900," << 560 + 9 * series.size() << " font 'Sans,10' noenhanced\n"
      << kSetOutput << "set grid xtics ytics mxtics mytics\nset logscale xy\nset format x '%g'\nset format y '%g'\n"
-     << "set key outside right top\nset title " << quoted(labels.title) << "\nset xlabel " << quoted(labels.x)
+     << "set key below left Left reverse maxrows " << (series.size() + 1) / 2 << "\nset bmargin "
+     << 5 + (series.size() + 1) / 2 << "\nset title " << quoted(labels.title) << "\nset xlabel " << quoted(labels.x)
      << "\nset ylabel " << quoted(labels.y) << "\nset offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05\n";
   std::vector<std::string> plots;
   static const char* colours[] = {"#1b6ca8", "#d95f02", "#1b9e77", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d"};
@@ -386,8 +387,10 @@ void plot_loglog(const std::vector<ChartSeries>& series, const ChartLabels& labe
     if (x.empty()) continue;
     const fs::path data = tmp / ("series" + std::to_string(s) + ".dat");
     write_columns(data, {&x, &y});
-    plots.push_back(quoted(data.string()) + " using 1:2 with linespoints lw 2 pt " + std::to_string(5 + s % 8) +
-                    " ps 1.2 lc rgb '" + colours[s % 8] + "'" + (series[s].dashed ? " dt 2" : "") + " title " +
+    const std::size_t colour = series[s].colour >= 0 ? static_cast<std::size_t>(series[s].colour) : s;
+    const int point = series[s].point >= 0 ? series[s].point : static_cast<int>(5 + s % 8);
+    plots.push_back(quoted(data.string()) + " using 1:2 with linespoints lw 2 pt " + std::to_string(point) +
+                    " ps 1.2 lc rgb '" + colours[colour % 8] + "'" + (series[s].dashed ? " dt 2" : "") + " title " +
                     quoted(series[s].title));
   }
   if (plots.empty()) {

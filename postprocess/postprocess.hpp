@@ -202,6 +202,8 @@ struct ChartSeries {
   std::string title;
   std::vector<double> x, y;
   bool dashed = false;
+  int colour = -1;  // index into the palette (-1: the series' own index)
+  int point = -1;   // gnuplot point type (-1: by the series' index)
 };
 struct ChartLabels {
   std::string title, x, y;

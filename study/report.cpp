@@ -1,6 +1,7 @@
 // The study's outputs: study.json (every number, for scripts and tests), cost-error.png (wall
 // time against estimated relative error, log-log, one series per monitor quantity and metric), and
 // one page as report.md and report.html (self-contained, the chart embedded).
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -111,11 +112,15 @@ Json to_json(const Results& r) {
 
 void draw_chart(const Results& r, const std::string& png) {
   std::vector<post::ChartSeries> series;
+  std::vector<std::string> columns;  // one colour per column; the metric picks the point
   for (const auto& s : r.series) {
     if (!s.skipped.empty()) continue;
+    if (std::find(columns.begin(), columns.end(), s.column) == columns.end()) columns.push_back(s.column);
     post::ChartSeries c;
     c.title = s.name() + (s.e.asymptotic ? "" : " [not asymptotic]");
     c.dashed = !s.e.asymptotic;
+    c.colour = static_cast<int>(std::find(columns.begin(), columns.end(), s.column) - columns.begin());
+    c.point = s.metric == "end" ? 5 : 6;
     for (std::size_t k = 0; k < r.count; ++k) {
       c.x.push_back(r.levels[r.first + k].cost());
       c.y.push_back(100.0 * s.relative[k]);
@@ -135,13 +140,13 @@ void draw_chart(const Results& r, const std::string& png) {
 std::string stability_text(const LevelRun& L) {
   if (L.worst.is_null()) return "—";
   std::string out = L.crossed.empty() ? "no threshold crossed" : "**crossed**:";
-  for (const auto& c : L.crossed) out += " " + c + ";";
+  for (std::size_t k = 0; k < L.crossed.size(); ++k) out += (k ? ", " : " ") + L.crossed[k];
   // The indicators a user looks at first: the worst energy error and checkerboards.
+  std::string worst;
   for (const char* key : {"energy_error", "pressure_checkerboard", "mean_stress_checkerboard"})
     if (L.worst.contains(key) && L.worst[key].is_object())
-      out += std::string(" ") + key + " " + num(L.worst[key].value("value", NAN), 3) + ";";
-  if (!out.empty() && out.back() == ';') out.pop_back();
-  return out;
+      worst += (worst.empty() ? "" : ", ") + std::string(key) + " " + num(L.worst[key].value("value", NAN), 3);
+  return worst.empty() ? out : out + "; worst " + worst;
 }
 
 post::Page page(const Results& r, bool chart) {
