@@ -8,6 +8,7 @@
 
 #include "postprocess/page.hpp"
 #include "postprocess/postprocess.hpp"
+#include "scene/budget.hpp"
 #include "study/results.hpp"
 #include "swmpm/version.hpp"
 
@@ -46,6 +47,7 @@ Json to_json(const Results& r) {
   j["shape_function"] = r.shape_function;
   j["cell_size"] = r.h0;
   j["ratio"] = r.ratio;
+  j["cell_sizes_given"] = r.fixed;
   j["dt_rule"] = r.dt_rule;
   j["tolerance"] = r.tolerance;
   j["budget_seconds"] = r.budget_seconds;
@@ -168,12 +170,13 @@ post::Page page(const Results& r, bool chart) {
     p.add_paragraph("**No level is within the tolerance of " + percent(r.tolerance) + "**. The largest estimate at the finest level is " +
                     percent(r.worst_error) + " (" + r.worst_series + "). At its observed order (first order where the runs are "
                     "not in the asymptotic range) a cell size of about **" + num(r.needed_cell_size, 3) +
-                    " m** would meet it, predicted to take about " + num(r.needed_seconds, 3) + " s (" +
-                    num(r.needed_seconds / 3600.0, 3) + " h) for one run on this machine.");
+                    " m** would meet it, predicted to take about " + scene::format_duration(r.needed_seconds) +
+                    " for one run on this machine.");
   }
   std::vector<std::string> method{
-      "Levels: cell size h = h0 / r^j with r = " + num(r.ratio, 4) + " (h0 = " + num(r.h0, 6) +
-          " m, the scene's); particles per cell as in the scene, so the particle spacing refines with h; dt: " + r.dt_rule + ".",
+      (r.fixed ? "Levels: the cell sizes given by --cell-sizes, ratio r = " + num(r.ratio, 4) + " (the scene's is " + num(r.h0, 6) + " m)"
+               : "Levels: cell size h = h0 / r^j with r = " + num(r.ratio, 4) + " (h0 = " + num(r.h0, 6) + " m, the scene's)") +
+          "; particles per cell as in the scene, so the particle spacing refines with h; dt: " + r.dt_rule + ".",
       "Metrics: **end** = the monitor's value at the end time (" + num(r.end_time, 6) + " s); **history** = the RMS over the "
           "monitor's rows from t = " + num(r.from, 6) + " s, every level interpolated linearly onto the coarsest level's times.",
       "Richardson extrapolation on the three finest levels: observed order p = ln(|q1 − q2| / |q2 − q3|) / ln r, "

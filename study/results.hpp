@@ -49,6 +49,7 @@ struct Results {
   int dimension = 2;
   double h0 = 0.0, ratio = 2.0, tolerance = 0.02, budget_seconds = 0.0, from = 0.0, end_time = 0.0;
   std::string metric;
+  bool fixed = false;             // the levels came from --cell-sizes
   std::vector<LevelRun> levels;   // every level run, coarse to fine
   std::size_t first = 0, count = 0;  // the block of consecutive completed levels the estimates use
   std::vector<Series> series;

@@ -266,6 +266,7 @@ class Study {
         candidates_.push_back(level(static_cast<int>(k), h));
       }
       fixed_ = true;
+      r_.fixed = true;
       return;
     }
     r_.ratio = o_.ratio;
