@@ -164,7 +164,7 @@ post::Page page(const Results& r, bool chart) {
     const LevelRun& L = r.levels[static_cast<std::size_t>(r.recommended)];
     p.add_paragraph("**" + L.label + "** (cell size " + num(L.h, 6) + " m, " + num(L.particles, 6) + " particles, " +
                     num(L.cost(), 3) + " s) is the cheapest level whose estimated error is within the tolerance of " +
-                    percent(r.tolerance) + " for every estimated quantity. The largest estimate at the finest level is " +
+                    percent(r.tolerance) + " for every estimated quantity and whose run crossed no stability threshold. The largest estimate at the finest level is " +
                     percent(r.worst_error) + " (" + r.worst_series + ").");
   } else {
     p.add_paragraph("**No level is within the tolerance of " + percent(r.tolerance) + "**. The largest estimate at the finest level is " +
