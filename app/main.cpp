@@ -1,4 +1,4 @@
-// swmpm — the command (interface.md §1): preprocess | solve | postprocess | run | element.
+// swmpm — the command (interface.md §1): preprocess | solve | postprocess | run | study | element.
 #include <CLI/CLI.hpp>
 #include <malloc.h>
 
@@ -20,6 +20,7 @@
 #include "solver/element.hpp"
 #include "solver/output/checkpoint.hpp"
 #include "solver/run.hpp"
+#include "study/study.hpp"
 #include "swmpm/version.hpp"
 
 namespace {
@@ -321,6 +322,24 @@ int main(int argc, char** argv) {
   run->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::NonNegativeNumber);
   run_dir_flags(run);
 
+  auto* study = app.add_subcommand("study", "The scene at several resolutions: wall time against the estimated error "
+                                             "of every monitor, and the cheapest resolution within a tolerance");
+  swmpm::study::StudyOptions st;
+  study->add_option("scene", st.scene_path, "Scene file (JSON)")->required();
+  study->add_option("-o,--output", st.out_dir, "Study folder (default study/<scene name>): report.md, report.html, "
+                                               "cost-error.png, study.json, runs/<level>/, scenes/<level>.json");
+  study->add_option("--budget", st.budget_minutes, "Wall time the whole study may take [min] (default 30): sets the finest level");
+  study->add_option("--tolerance", st.tolerance, "Relative error the recommended level must meet (default 0.02)");
+  study->add_option("--levels", st.levels, "Fewest levels (default 3, at most 8)");
+  study->add_option("--ratio", st.ratio, "Refinement ratio of the cell size between levels (default 2)");
+  study->add_option("--cell-sizes", st.cell_sizes, "H1,H2,H3,... [m]: these levels, coarse to fine, a constant ratio")
+      ->delimiter(',');
+  study->add_option("--monitor", st.monitors, "MONITOR or MONITOR.QUANTITY to estimate (repeatable; default: every one)");
+  study->add_option("--metric", st.metric, "end (the value at the end time), history (RMS over the rows) or both (default)");
+  study->add_option("--from", st.from, "The history metric starts at this time [s] (default 0)");
+  study->add_option("--threads", threads, "OpenMP threads of each run (default: all cores)")->check(CLI::NonNegativeNumber);
+  run_dir_flags(study);
+
   auto* element = app.add_subcommand("element", "Drive one material point of a scene's material (calibration, checks)");
   ElementArgs el;
   element->add_option("scene", scene_path, "Scene file (JSON) that defines the material")->required();
@@ -339,7 +358,7 @@ int main(int argc, char** argv) {
   element->add_option("--plot", el.plot,
                       "PNG: q-p', q-axial strain, volumetric strain (undrained: excess pore pressure) and, "
                       "where the model has it, the state parameter against axial strain; one curve per p0");
-  for (auto* sub : {pre, solve, post, run, element}) sub->add_flag("-q,--quiet", quiet, "No terminal output");
+  for (auto* sub : {pre, solve, post, run, study, element}) sub->add_flag("-q,--quiet", quiet, "No terminal output");
 
   CLI11_PARSE(app, argc, argv);
   try {
@@ -373,6 +392,19 @@ int main(int argc, char** argv) {
       PostArgs report;
       report.command = "report";
       return postprocess_command(dir, report, quiet);
+    }
+    if (*study) {
+      st.threads = threads;
+      st.quiet = quiet;
+      st.overwrite = pre_opt.overwrite;
+      st.trust_geometry = pre_opt.trust_geometry;
+      st.max_memory = pre_opt.max_memory;
+      try {
+        return swmpm::study::run_study(st);
+      } catch (const std::invalid_argument& e) {  // an option: named in the message, nothing written
+        std::cerr << "swmpm study: " << e.what() << "\n";
+        return 2;
+      }
     }
     if (*element) return element_command(swmpm::scene::load_scene(scene_path), el, quiet);
   } catch (const swmpm::scene::SceneError& e) {

@@ -364,3 +364,48 @@ void plot_element_curves(const CsvResult& table, const std::string& title, const
 }
 
 }  // namespace swmpm::post
+
+namespace swmpm::post {
+
+void plot_loglog(const std::vector<ChartSeries>& series, const ChartLabels& labels, const std::string& png) {
+  TempDir tmp;
+  std::ostringstream gp;
+  gp << "set terminal pngcairo size 900," << 560 + 9 * series.size() << " font 'Sans,10' noenhanced\n"
+     << kSetOutput << "set grid xtics ytics mxtics mytics\nset logscale xy\nset format x '%g'\nset format y '%g'\n"
+     << "set key below left Left reverse maxrows " << (series.size() + 1) / 2 << "\nset bmargin "
+     << 5 + (series.size() + 1) / 2 << "\nset title " << quoted(labels.title) << "\nset xlabel " << quoted(labels.x)
+     << "\nset ylabel " << quoted(labels.y) << "\nset offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05\n";
+  std::vector<std::string> plots;
+  static const char* colours[] = {"#1b6ca8", "#d95f02", "#1b9e77", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d"};
+  for (std::size_t s = 0; s < series.size(); ++s) {
+    std::vector<double> x, y;  // a log axis shows positive values only
+    for (std::size_t i = 0; i < series[s].x.size(); ++i)
+      if (series[s].x[i] > 0.0 && series[s].y[i] > 0.0 && std::isfinite(series[s].x[i]) && std::isfinite(series[s].y[i])) {
+        x.push_back(series[s].x[i]);
+        y.push_back(series[s].y[i]);
+      }
+    if (x.empty()) continue;
+    const fs::path data = tmp / ("series" + std::to_string(s) + ".dat");
+    write_columns(data, {&x, &y});
+    const std::size_t colour = series[s].colour >= 0 ? static_cast<std::size_t>(series[s].colour) : s;
+    const int point = series[s].point >= 0 ? series[s].point : static_cast<int>(5 + s % 8);
+    plots.push_back(quoted(data.string()) + " using 1:2 with linespoints lw 2 pt " + std::to_string(point) +
+                    " ps 1.2 lc rgb '" + colours[colour % 8] + "'" + (series[s].dashed ? " dt 2" : "") + " title " +
+                    quoted(series[s].title));
+  }
+  if (plots.empty()) {
+    gp << "set label 1 'no positive error to draw' at graph 0.5, 0.5 center\nunset logscale\nplot [0:1] [0:1] NaN notitle\n";
+  } else {
+    if (labels.y_line > 0.0) {
+      gp << "set arrow 1 from graph 0, first " << labels.y_line << " to graph 1, first " << labels.y_line
+         << " nohead dt 3 lw 1.5 lc rgb '#cc0000'\nset label 2 " << quoted(labels.y_line_title) << " at graph 0.01, first "
+         << labels.y_line * 1.12 << " tc rgb '#cc0000'\n";
+    }
+    gp << "plot ";
+    for (std::size_t k = 0; k < plots.size(); ++k) gp << (k ? ", " : "") << plots[k];
+    gp << "\n";
+  }
+  run_gnuplot(gp.str(), png, tmp);
+}
+
+}  // namespace swmpm::post

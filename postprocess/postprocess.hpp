@@ -197,6 +197,23 @@ std::vector<std::string> plot_monitors(const std::string& run_dir, const std::ve
 std::vector<std::string> plot_fields(const std::string& run_dir, const std::string& quantity,
                                      const std::vector<double>& times, const std::string& phase = "solid");
 
+/// One curve of a log-log chart; `dashed` for a series that is only indicative.
+struct ChartSeries {
+  std::string title;
+  std::vector<double> x, y;
+  bool dashed = false;
+  int colour = -1;  // index into the palette (-1: the series' own index)
+  int point = -1;   // gnuplot point type (-1: by the series' index)
+};
+struct ChartLabels {
+  std::string title, x, y;
+  double y_line = 0.0;       // a horizontal line at this y (a tolerance); 0: none
+  std::string y_line_title;  // its label
+};
+/// A log-log chart of the series (points with x or y not positive are left out) into `png`,
+/// replaced atomically (the caller claims it on its folder's ledger first).
+void plot_loglog(const std::vector<ChartSeries>& series, const ChartLabels& labels, const std::string& png);
+
 // ---------------------------------------------------------------------------------------------
 // report (report.cpp)
 

@@ -8,16 +8,15 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
-#include <vtkBase64Utilities.h>
 
 #include "postprocess/format.hpp"
+#include "postprocess/page.hpp"
 #include "postprocess/postprocess.hpp"
+#include "scene/budget.hpp"
 #include "scene/files.hpp"
 #include "scene/input.hpp"
 
@@ -49,134 +48,7 @@ std::string text(const json& v) {
 
 std::string get(const json& j, const std::string& key) { return j.contains(key) ? text(j[key]) : "—"; }
 
-/// "4.2 s", "3.1 min", "1.5 h".
-std::string duration(double seconds) {
-  if (seconds < 120.0) return num(seconds, 3) + " s";
-  if (seconds < 7200.0) return num(seconds / 60.0, 3) + " min";
-  return num(seconds / 3600.0, 3) + " h";
-}
-
-std::string html_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
-/// Escaped text with `code` spans (the only markup the page's text uses) as <code>.
-std::string html_inline(const std::string& s) {
-  std::string out;
-  bool code = false;
-  std::size_t from = 0;
-  for (std::size_t k = s.find('`'); k != std::string::npos; k = s.find('`', from)) {
-    out += html_escape(s.substr(from, k - from)) + (code ? "</code>" : "<code>");
-    code = !code;
-    from = k + 1;
-  }
-  out += html_escape(s.substr(from));
-  return code ? out + "</code>" : out;
-}
-
-/// A Markdown table cell: '|' would end the cell, a newline the row.
-std::string md_cell(const std::string& s) {
-  std::string out;
-  for (char c : s) out += c == '|' ? std::string("\\|") : c == '\n' ? std::string(" ") : std::string(1, c);
-  return out;
-}
-
-std::string base64(const std::string& bytes) {
-  std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
-  const auto n = vtkBase64Utilities::Encode(reinterpret_cast<const unsigned char*>(bytes.data()),
-                                            static_cast<unsigned long>(bytes.size()),
-                                            reinterpret_cast<unsigned char*>(out.data()));
-  out.resize(n);
-  return out;
-}
-
 using Rows = std::vector<std::vector<std::string>>;
-
-/// One page written twice as it is built: Markdown and HTML.
-class Page {
- public:
-  explicit Page(fs::path dir) : dir_(std::move(dir)) {}
-
-  void heading(int level, const std::string& s) {
-    md_ << std::string(static_cast<std::size_t>(level), '#') << " " << s << "\n\n";
-    html_ << "<h" << level << ">" << html_inline(s) << "</h" << level << ">\n";
-  }
-  void paragraph(const std::string& s) {
-    md_ << s << "\n\n";
-    html_ << "<p>" << html_inline(s) << "</p>\n";
-  }
-  /// A table; an all-empty header gives a two-column key–value table.
-  void table(const std::vector<std::string>& header, const Rows& rows) {
-    md_ << "|";
-    for (const auto& h : header) md_ << " " << md_cell(h) << " |";
-    md_ << "\n|";
-    for (std::size_t k = 0; k < header.size(); ++k) md_ << "---|";
-    md_ << "\n";
-    for (const auto& r : rows) {
-      md_ << "|";
-      for (const auto& c : r) md_ << " " << md_cell(c) << " |";
-      md_ << "\n";
-    }
-    md_ << "\n";
-    const bool headed = std::any_of(header.begin(), header.end(), [](const std::string& h) { return !h.empty(); });
-    html_ << "<table>\n";
-    if (headed) {
-      html_ << "<tr>";
-      for (const auto& h : header) html_ << "<th>" << html_inline(h) << "</th>";
-      html_ << "</tr>\n";
-    }
-    for (const auto& r : rows) {
-      html_ << "<tr>";
-      for (std::size_t k = 0; k < r.size(); ++k)
-        html_ << (!headed && k == 0 ? "<th>" : "<td>") << html_inline(r[k]) << (!headed && k == 0 ? "</th>" : "</td>");
-      html_ << "</tr>\n";
-    }
-    html_ << "</table>\n";
-  }
-  /// A PNG of the run directory: linked in Markdown, embedded in HTML.
-  void image(const std::string& caption, const fs::path& png) {
-    const std::string rel = fs::relative(png, dir_).string();
-    md_ << "![" << caption << "](" << rel << ")\n\n";
-    std::ifstream in(png, std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (!in.good() && !in.eof()) throw std::runtime_error(png.string() + ": cannot be read for report.html");
-    html_ << "<figure><img alt=\"" << html_escape(caption) << "\" src=\"data:image/png;base64," << base64(bytes)
-          << "\"><figcaption>" << html_inline(caption) << " (<code>" << html_escape(rel)
-          << "</code>)</figcaption></figure>\n";
-  }
-
-  std::string markdown() const { return md_.str(); }
-  std::string html(const std::string& title) const {
-    std::ostringstream h;
-    h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" << html_escape(title)
-      << "</title>\n<style>\n"
-      << "body { font-family: sans-serif; max-width: 60em; margin: 2em auto; padding: 0 1em; color: #222; }\n"
-      << "table { border-collapse: collapse; margin: 0.5em 0 1em; font-size: 0.9em; }\n"
-      << "th, td { border: 1px solid #bbb; padding: 0.2em 0.5em; text-align: left; vertical-align: top; }\n"
-      << "th { background: #eee; }\n"
-      << "figure { display: inline-block; margin: 0.5em; }\n"
-      << "img { max-width: 100%; border: 1px solid #ddd; }\n"
-      << "figcaption { font-size: 0.85em; color: #555; }\n"
-      << "code { background: #f4f4f4; padding: 0 0.2em; }\n"
-      << "</style>\n</head>\n<body>\n"
-      << html_.str() << "</body>\n</html>\n";
-    return h.str();
-  }
-
- private:
-  fs::path dir_;
-  std::ostringstream md_, html_;
-};
 
 void setup_section(Page& page, const json& scene, const json& run) {
   const int dim = scene.value("dimension", run.value("dimension", 2));
@@ -211,8 +83,8 @@ void setup_section(Page& page, const json& scene, const json& run) {
     if (t.contains("cfl") && t.value("dt", json()).is_string()) time += " (cfl " + get(t, "cfl") + ")";  // auto
     rows.push_back({"time", time});
   }
-  page.heading(2, "Setup");
-  page.table({"", ""}, rows);
+  page.add_heading("Setup");
+  page.add_table({"", ""}, rows);
   if (scene.contains("materials")) {
     Rows m_rows;
     for (const auto& m : scene["materials"]) {
@@ -221,8 +93,8 @@ void setup_section(Page& page, const json& scene, const json& run) {
         if (key != "name" && key != "model") params += (params.empty() ? "" : ", ") + key + " " + text(value);
       m_rows.push_back({get(m, "name"), get(m, "model"), params});
     }
-    page.paragraph("Materials:");
-    page.table({"name", "model", "parameters"}, m_rows);
+    page.add_paragraph("Materials:");
+    page.add_table({"name", "model", "parameters"}, m_rows);
   }
   if (scene.contains("bodies")) {
     Rows b_rows;
@@ -231,37 +103,37 @@ void setup_section(Page& page, const json& scene, const json& run) {
       if (b.contains("geometry") && b["geometry"].contains("file")) geometry += " " + get(b["geometry"], "file");
       b_rows.push_back({get(b, "name"), geometry, get(b, "solid"), get(b, "fluid"), get(b, "particles_per_cell")});
     }
-    page.paragraph("Bodies:");
-    page.table({"name", "geometry", "solid", "fluid", "particles per cell"}, b_rows);
+    page.add_paragraph("Bodies:");
+    page.add_table({"name", "geometry", "solid", "fluid", "particles per cell"}, b_rows);
   }
 }
 
 /// Which formulation ran and why: named in the scene, or chosen by "auto" with both estimates.
 void formulation_section(Page& page, const json& run) {
-  page.heading(2, "Formulation");
+  page.add_heading("Formulation");
   const json choice = run.value("formulation_choice", json());
   const std::string ran = get(run, "formulation");
   if (!choice.is_object() || !choice.value("automatic", false)) {
-    page.paragraph("`" + ran + "`, as the scene file names it." +
+    page.add_paragraph("`" + ran + "`, as the scene file names it." +
                    (run.contains("formulation_reason") && !get(run, "formulation_reason").empty() &&
                             get(run, "formulation_reason") != "—"
                         ? " " + get(run, "formulation_reason")
                         : ""));
     return;
   }
-  page.paragraph("`" + ran + "`, chosen by `\"formulation\": \"auto\"` before the first step: " +
+  page.add_paragraph("`" + ran + "`, chosen by `\"formulation\": \"auto\"` before the first step: " +
                  choice.value("reason", std::string("(no reason recorded)")));
   const json estimates = choice.value("estimates", json::array());
   if (!estimates.is_array() || estimates.empty()) return;
   Rows rows;
   for (const auto& e : estimates)
     rows.push_back({get(e, "formulation"), get(e, "dt"), get(e, "steps"), get(e, "us_per_point_step"),
-                    e.contains("wall_seconds") && e["wall_seconds"].is_number() ? duration(e["wall_seconds"].get<double>()) : "—",
+                    e.contains("wall_seconds") && e["wall_seconds"].is_number() ? scene::format_duration(e["wall_seconds"].get<double>()) : "—",
                     get(e, "dt_reason")});
-  page.paragraph("The estimates it compared (one thread; µs per point-step as measured on the bench machine):");
-  page.table({"formulation", "dt [s]", "steps", "µs per point-step", "estimated wall time", "step limited by"}, rows);
+  page.add_paragraph("The estimates it compared (one thread; µs per point-step as measured on the bench machine):");
+  page.add_table({"formulation", "dt [s]", "steps", "µs per point-step", "estimated wall time", "step limited by"}, rows);
   if (run.contains("wall_seconds") && run["wall_seconds"].is_number())
-    page.paragraph("This run took " + duration(run["wall_seconds"].get<double>()) + " on " + get(run, "threads") +
+    page.add_paragraph("This run took " + scene::format_duration(run["wall_seconds"].get<double>()) + " on " + get(run, "threads") +
                    " thread(s).");
 }
 
@@ -278,8 +150,8 @@ void cost_section(Page& page, const json& run) {
     rows.push_back({"peak memory", num(run["peak_memory_bytes"].get<double>() / (1024.0 * 1024.0), 4) + " MiB"});
   rows.push_back({"frames", get(run, "frames")});
   rows.push_back({"software", "swmpm " + get(run, "software_version") + " (" + get(run, "git_hash") + ")"});
-  page.heading(2, "Cost");
-  page.table({"", ""}, rows);
+  page.add_heading("Cost");
+  page.add_table({"", ""}, rows);
   if (run.contains("stage_seconds") && run["stage_seconds"].is_object() && !run["stage_seconds"].empty()) {
     // Largest first: JSON objects come back in key order, which says nothing about cost.
     std::vector<std::pair<double, std::string>> stages;
@@ -298,17 +170,17 @@ void cost_section(Page& page, const json& run) {
       s_rows.push_back({stage, num(seconds, 4), num(whole > 0 ? 100.0 * seconds / whole : 0.0, 3) + " %"});
     if (whole > total)
       s_rows.push_back({"frames, monitors, energy checks", num(whole - total, 4), num(100.0 * (whole - total) / whole, 3) + " %"});
-    page.paragraph("Where the time loop's time went (stages of the formulation, and the rest of the loop):");
-    page.table({"stage", "seconds", "share of the loop"}, s_rows);
+    page.add_paragraph("Where the time loop's time went (stages of the formulation, and the rest of the loop):");
+    page.add_table({"stage", "seconds", "share of the loop"}, s_rows);
   }
 }
 
 /// The run's own stability indicators (run.json `stability`): per indicator its threshold, the
 /// worst value with its time and place, and how many frames crossed the threshold.
 void stability_section(Page& page, const json& run) {
-  page.heading(2, "Stability");
+  page.add_heading("Stability");
   if (!run.contains("stability") || !run["stability"].is_object()) {
-    page.paragraph("run.json has no `stability` record (a run made before the indicators existed).");
+    page.add_paragraph("run.json has no `stability` record (a run made before the indicators existed).");
     return;
   }
   const json& st = run["stability"];
@@ -348,18 +220,18 @@ void stability_section(Page& page, const json& run) {
     rows.push_back({name, bound, num(w.value("value", 0.0), 4), get(w, "time"), where,
                     n > 0 ? "CROSSED in " + std::to_string(n) + " of " + std::to_string(frames) + " frames" : "within"});
   }
-  page.paragraph(crossed == 0 ? "Every indicator stayed within its threshold over the " + std::to_string(frames) +
+  page.add_paragraph(crossed == 0 ? "Every indicator stayed within its threshold over the " + std::to_string(frames) +
                                     " frames (definitions: docs/verification.md, \"Stability indicators of every run\")."
                               : std::to_string(crossed) + " indicator(s) crossed their threshold: read the results with "
                                                           "care (definitions and what a crossing means: "
                                                           "docs/verification.md, \"Stability indicators of every run\").");
-  page.table({"indicator", "threshold", "worst", "at t [s]", "where", "verdict"}, rows);
+  page.add_table({"indicator", "threshold", "worst", "at t [s]", "where", "verdict"}, rows);
 }
 
 void comparison_section(Page& page, const std::string& run_dir, const std::vector<ReferenceSpec>& refs) {
   if (refs.empty()) return;
-  page.heading(2, "Comparison with references");
-  page.paragraph("The monitor is interpolated linearly onto the reference times inside the run's time span. "
+  page.add_heading("Comparison with references");
+  page.add_paragraph("The monitor is interpolated linearly onto the reference times inside the run's time span. "
                  "Relative L2 = ‖run − reference‖₂ / ‖reference‖₂.");
   Rows rows;
   for (const auto& r : refs) {
@@ -368,7 +240,7 @@ void comparison_section(Page& page, const std::string& run_dir, const std::vecto
                     num(c.rel_l2, 4), num(c.max_abs, 4) + " (" + num(c.max_abs_time) + ")",
                     num(c.peak_run) + " (" + num(c.peak_run_time) + ")", num(c.peak_ref) + " (" + num(c.peak_ref_time) + ")"});
   }
-  page.table({"monitor", "reference", "points", "span [s]", "relative L2", "max abs error (at t)", "peak run (at t)",
+  page.add_table({"monitor", "reference", "points", "span [s]", "relative L2", "max abs error (at t)", "peak run (at t)",
               "peak reference (at t)"},
              rows);
 }
@@ -444,9 +316,9 @@ std::string write_report(const std::string& run_dir, const std::vector<Reference
   }
 
   const std::string title = "Run report: " + get(scene, "name");
-  Page page(dir);
-  page.heading(1, title);
-  page.paragraph("Run directory `" + run_dir + "`. Everything below is read from its `scene.json`, `run.json`, "
+  Page page;
+  page.title = title;
+  page.add_paragraph("Run directory `" + run_dir + "`. Everything below is read from its `scene.json`, `run.json`, "
                  "`monitors.csv` and `output/`; units SI.");
   setup_section(page, scene, run);
   formulation_section(page, run);
@@ -454,20 +326,20 @@ std::string write_report(const std::string& run_dir, const std::vector<Reference
   stability_section(page, run);
   comparison_section(page, run_dir, references);
   if (!monitor_pngs.empty()) {
-    page.heading(2, "Monitors");
-    for (const auto& png : monitor_pngs) page.image("monitor " + fs::path(png).stem().string(), png);
+    page.add_heading("Monitors");
+    for (const auto& png : monitor_pngs) page.add_image("monitor " + fs::path(png).stem().string(), fs::relative(png, dir).string());
   }
   if (!field_pngs.empty()) {
-    page.heading(2, "Fields");
+    page.add_heading("Fields");
     for (const auto& png : field_pngs) {
       // field_<quantity>_<t>.png
       const std::string stem = fs::path(png).stem().string().substr(6);
       const auto cut = stem.rfind('_');
-      page.image(stem.substr(0, cut) + " at t = " + stem.substr(cut + 1) + " s", png);
+      page.add_image(stem.substr(0, cut) + " at t = " + stem.substr(cut + 1) + " s", fs::relative(png, dir).string());
     }
   }
   ledger.write_text("report.md", page.markdown());
-  ledger.write_text("report.html", page.html(title));
+  ledger.write_text("report.html", page.html(dir.string()));
   return (dir / "report.md").string();
 }
 

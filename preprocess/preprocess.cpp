@@ -373,20 +373,25 @@ void reject_unused_switches(const std::string& scene_path, const scene::Scene& s
 /// files swmpm wrote there) when `overwrite` is given and refused otherwise; a file of a name swmpm
 /// writes that swmpm did not write is always refused.
 void prepare_run_directory(files::RunDirectory& run, bool overwrite) {
-  if (run.holds_a_run()) {
-    if (!overwrite) {
-      std::string status;
-      try {
-        status = scene::read_json_file((run / "run.json").string(), "run.json").value("status", "");
-      } catch (const std::exception&) {
-      }
-      throw files::RunDirectoryError(
-          run.dir().string() + ": holds an earlier swmpm run" + (status.empty() ? "" : " (status " + status + ")") +
-          "; pass --overwrite to replace it (only the files swmpm wrote there are removed), or choose another run "
-          "directory (-o)");
+  check_run_directory(run, overwrite);
+  if (run.holds_a_run()) run.remove_owned([](const std::string&) { return true; });
+}
+
+}  // namespace
+
+void check_run_directory(const files::RunDirectory& run, bool overwrite) {
+  if (run.holds_a_run() && !overwrite) {
+    std::string status;
+    try {
+      status = scene::read_json_file((run / "run.json").string(), "run.json").value("status", "");
+    } catch (const std::exception&) {
     }
-    run.remove_owned([](const std::string&) { return true; });
+    throw files::RunDirectoryError(
+        run.dir().string() + ": holds an earlier swmpm run" + (status.empty() ? "" : " (status " + status + ")") +
+        "; pass --overwrite to replace it (only the files swmpm wrote there are removed), or choose another run "
+        "directory (-o)");
   }
+  // After an overwrite only foreign files remain: check those the run would write.
   const auto foreign = run.foreign(files::swmpm_files_in(run.dir()));
   if (!foreign.empty())
     throw files::RunDirectoryError((run / foreign.front()).string() +
@@ -395,8 +400,6 @@ void prepare_run_directory(files::RunDirectory& run, bool overwrite) {
                                    (foreign.size() > 1 ? " (" + std::to_string(foreign.size() - 1) + " more such files)"
                                                        : std::string()));
 }
-
-}  // namespace
 
 std::vector<std::string> explain(const std::string& scene_path) {
   const scene::Scene s = scene::load_scene(scene_path);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "preprocess/shape.hpp"
+#include "scene/files.hpp"
 #include "scene/pointcloud.hpp"
 #include "scene/scene.hpp"
 
@@ -87,6 +88,11 @@ struct PreprocessOptions {
 /// (scene/auto_formulation.hpp), as printed lines. Checks the scene as preprocess does before it
 /// seeds (throws scene::SceneError) and writes nothing.
 std::vector<std::string> explain(const std::string& scene_path);
+
+/// Throws files::RunDirectoryError when preprocess could not use `run` as its run directory: it
+/// holds an earlier run and `overwrite` is false, or a file of a name swmpm writes is there that
+/// swmpm did not write. Writes nothing (`swmpm study` checks every run directory before it starts).
+void check_run_directory(const files::RunDirectory& run, bool overwrite);
 
 /// Runs the whole stage. Nothing is written unless everything succeeds. Returns the run directory
 /// (`out_dir`, or runs/<scene name> when empty). Throws scene::SceneError (the scene),

@@ -618,10 +618,12 @@ class Runner {
   }
 
   void show_progress() {
-    if (!tty_) return;
+    if (!tty_ && !opt_.progress) return;
     const auto now = std::chrono::steady_clock::now();
     if (std::chrono::duration<double>(now - last_progress_).count() <= 0.5) return;
     last_progress_ = now;
+    if (opt_.progress) opt_.progress((state_.time - clock_.t_start) / std::max(clock_.end - clock_.t_start, 1e-300));
+    if (!tty_) return;
     const double el = std::chrono::duration<double>(now - loop_start_).count();
     const double rate = static_cast<double>(state_.step) / el;
     const double eta = el * (clock_.end - state_.time) / std::max(state_.time - clock_.t_start, 1e-300);

@@ -26,6 +26,9 @@ struct SolveOptions {
   bool quiet = false;  // no terminal output (log.txt is still written)
   bool resume = false;  // continue from RUN_DIR/checkpoint.bin (--resume)
   double max_memory = 0.0;  // B, --max-memory: refuse a run that needs more (0: the machine's memory)
+  /// Called from the time loop at most twice a second with the share of the run's time span done
+  /// (0 to 1), whether or not the terminal shows progress: `swmpm study` draws one bar over its runs.
+  std::function<void(double done)> progress = nullptr;
 };
 
 /// Runs the formulation of RUN_DIR/scene.json on RUN_DIR/particles/*.vtu and writes output/,
