@@ -208,7 +208,10 @@ void check_run_memory(const Scene& s, const std::string& scene_file, double poin
 
 double step_microseconds(const Scene& s, Formulation f, double points) {
   const Cost& c = row_of(f).cost;
-  return 20.0 + points * c.us_per_point_step + grid_extent(s).nodes * c.us_per_node_step;
+  // The grid's work runs once per step of the fluid: every soil_substeps-th step in mpm-fem
+  // (solver.soil_substeps, default 1), every step elsewhere.
+  const double grid_share = f == Formulation::mpm_fem ? 1.0 / std::max(1, s.solver.soil_substeps) : 1.0;
+  return 20.0 + points * c.us_per_point_step + grid_extent(s).nodes * c.us_per_node_step * grid_share;
 }
 
 RunEstimate estimate_run(const Scene& s, double points, double dt, double t0) {

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "scene/auto_formulation.hpp"
+#include "scene/budget.hpp"
 #include "scene/formulations.hpp"
 #include "scene/scene.hpp"
 
@@ -232,4 +233,23 @@ TEST(AutoFormulation, TheResolvedSceneKeepsTheChoice) {
   ASSERT_EQ(lines.size(), 3u);
   EXPECT_NE(lines[1].find("estimate explicit-single-point: dt "), std::string::npos) << lines[1];
   EXPECT_NE(lines[2].find("estimate semi-implicit-single-point: dt "), std::string::npos) << lines[2];
+}
+
+// mpm-fem's grid work runs once per fluid step: with solver.soil_substeps k the estimate's
+// per-node part is divided by k, its per-point part is not (the D4 run at 4 mm with k = 3 was
+// estimated as if k were 1: 5.86 h).
+TEST(RunEstimate, MpmFemCountsTheGridOncePerFluidStep) {
+  json j = example("terzaghi-mpm-fem");
+  const Scene one = parse_scene(j, "t.json");
+  j["solver"]["soil_substeps"] = 3;
+  const Scene three = parse_scene(j, "t.json");
+  const double points = 1000.0;
+  const double us1 = step_microseconds(one, Formulation::mpm_fem, points);
+  const double us3 = step_microseconds(three, Formulation::mpm_fem, points);
+  const double fixed = step_microseconds(one, Formulation::mpm_fem, 0.0) - 20.0;  // the grid's part at k = 1
+  EXPECT_GT(fixed, 0.0);
+  EXPECT_NEAR(us1 - us3, fixed * (1.0 - 1.0 / 3.0), 1e-9 * us1);
+  // Other formulations do not read the key: their estimate is unchanged by it.
+  EXPECT_DOUBLE_EQ(step_microseconds(three, Formulation::explicit_double_point, points),
+                   step_microseconds(one, Formulation::explicit_double_point, points));
 }
