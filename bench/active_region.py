@@ -31,11 +31,11 @@ Usage: bench/active_region.py [--swmpm build/app/swmpm] [--formulations dry,...]
                               [--steps 200] [--fem-steps 20] [--repeat 3] [--out FILE.md]
                               [--record FILE.json] [--compare FILE.json] [--keep DIR]
 """
-import argparse, copy, datetime, glob, hashlib, json, os, platform, resource, subprocess, sys, tempfile
+import argparse, copy, datetime, glob, hashlib, json, os, resource, subprocess, sys, tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
-from dry_box import scene as box_scene  # noqa: E402
+from dry_box import emit, machine, scene as box_scene  # noqa: E402
 
 MPM_FORMULATIONS = ["dry", "explicit-single-point", "semi-implicit-single-point", "semi-implicit-double-point",
                     "explicit-double-point"]
@@ -182,16 +182,8 @@ def main():
         with open(a.record, "w") as f:
             json.dump({"binary": version, "hashes": hashes}, f, indent=1, sort_keys=True)
             f.write("\n")
-    cpu = "unknown"
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
     lines = [f"# Empty-space overhead — {datetime.date.today()}", "",
-             f"Binary: {version}. Machine: {cpu}, {os.cpu_count()} cores, {platform.platform()}.",
+             f"Binary: {version}. Machine: {machine()}.",
              f"One thread; fastest of {a.repeat} interleaved runs per grid; MPM columns {a.steps} steps, "
              f"mpm-fem {a.fem_steps} steps.", "",
              "| formulation | grid area | points | steps | loop wall s (fastest) | spread | vs 1x | solve CPU s (fastest) "
@@ -205,11 +197,7 @@ def main():
         lines += ["", f"Last frames against `{os.path.basename(a.compare)}`: "
                   + ("all identical" if all(ok for *_, ok in compared) else
                      "differ: " + ", ".join(f"{f} {ar}x" for f, ar, ok in compared if not ok)) + "."]
-    text = "\n".join(lines) + "\n"
-    if a.out:
-        with open(a.out, "w") as f:
-            f.write(text)
-    print(text)
+    emit(lines, a.out)
 
 
 if __name__ == "__main__":
