@@ -5,9 +5,11 @@
 // solver/grid/grid.hpp). Filled with zeros by std::vector, every page of such an array is written
 // once at construction: physical memory and the zeroing follow the grid's bounding box (the 16x
 // empty-space column of bench/active_region.py: semi-implicit-single-point 111 -> 224 MB).
-// NodeArray takes its memory from calloc instead, whose large blocks are fresh pages the kernel
-// maps as zeros on first touch, and does not write the zeros itself: a page outside every step's
-// box is never touched and never becomes memory. Reads see the same zeros, so results do not change.
+// NodeArray takes its memory straight from the kernel (an anonymous mapping, whose pages read as
+// zeros until first written) and does not write the zeros itself: a page outside every step's box
+// is never touched and never becomes memory. Reads see the same zeros, so results do not change.
+// (calloc would do the same only for blocks above malloc's mmap threshold, which glibc raises as
+// large blocks are freed: at 16x, 43 MB of the arrays came from the heap and were zeroed by memset.)
 //
 // Contract: only for element types whose zero value is all-zero bytes (double, integers, Vec, and
 // aggregates of them without non-zero default members), and sized once, from empty (NodeArray<T>
@@ -15,7 +17,9 @@
 // regrown elements. assign() and fill write as usual.
 #pragma once
 
-#include <cstdlib>
+#include <sys/mman.h>
+
+#include <cstddef>
 #include <new>
 #include <type_traits>
 #include <utility>
@@ -31,12 +35,15 @@ struct ZeroPages {
   template <class U>
   ZeroPages(const ZeroPages<U>&) noexcept {}
   T* allocate(std::size_t n) {
-    void* p = std::calloc(n, sizeof(T));  // glibc: at least 16-byte aligned, as Eigen's Vec<2> needs
-    if (!p) throw std::bad_alloc();
-    return static_cast<T*>(p);
+    if (n == 0) return nullptr;
+    void* p = ::mmap(nullptr, n * sizeof(T), PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) throw std::bad_alloc();
+    return static_cast<T*>(p);  // page-aligned: as aligned as any Eigen type needs
   }
-  void deallocate(T* p, std::size_t) noexcept { std::free(p); }
-  /// Value-initialisation (resize, the size constructor) writes nothing: calloc's bytes are zero.
+  void deallocate(T* p, std::size_t n) noexcept {
+    if (p) ::munmap(p, n * sizeof(T));
+  }
+  /// Value-initialisation (resize, the size constructor) writes nothing: the mapping reads as zeros.
   template <class U>
   void construct(U*) noexcept {}
   template <class U, class... Args>
