@@ -121,7 +121,7 @@ class FBar {
     ParticleSet<Dim>& ps = st.solid;
     const long n = static_cast<long>(ps.size());
     dJ_.resize(ps.size());
-    if (node_.empty()) node_.resize(g.num_nodes());  // zero (NodeArray), sized once
+    if (node_.size() != g.num_nodes()) node_ = NodeArray<std::array<double, 2>>(g.num_nodes());  // zero until used
     // (9)(c) ΔJ = det ΔF; eq. 80's nodal sums Σ N m, Σ N m ΔJ through the schedule.
     g.parallel_for_each_node(box, [&](std::size_t i, const auto&) { node_[i] = {0.0, 0.0}; });
     schedule.run([&](int p) {

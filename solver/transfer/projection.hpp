@@ -56,8 +56,10 @@ class NodeProjection {
   void fit(const Grid<Dim>& g, const NodeBox<Dim>& box, const StripeSchedule& schedule,
            const std::vector<shape::ShapeData<Dim, S, G>>& sd, const std::vector<Vec<Dim>>& x, Weight&& weight,
            Value&& value) {
-    if (blocks_.empty()) blocks_.resize(g.num_nodes() * NB);  // zero (NodeArray), sized once
-    if (well_posed_.empty()) well_posed_.resize(g.num_nodes());
+    if (well_posed_.size() != g.num_nodes()) {  // first fit (or another grid): zero, memory only where used
+      blocks_ = NodeArray<double>(g.num_nodes() * NB);
+      well_posed_ = NodeArray<std::uint8_t>(g.num_nodes());
+    }
     g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
       std::fill_n(block(i), NB, 0.0);
       well_posed_[i] = 0;
