@@ -148,16 +148,9 @@ def main():
             fbar_us = min(x["stage_seconds"].get("f-bar", 0.0) for x in runs) / (parts * r["steps"]) * 1e6
             print(f"{name:8s} fbar {fb:12s} {dim}D {parts:>8d} particles, {t} thread(s): {r['loop_us_per_particle_step']:.4f} us/particle-step "
                   f"(median of {a.repeat}: {median:.4f}; f-bar stage {fbar_us:.4f}), {mem:.0f} B/particle", flush=True)
-    cpu = "unknown"
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip(); break
-    except OSError:
-        pass
     title = "Dry MPM" if a.formulation == "dry" else a.formulation
     lines = [f"# {title} speed — {datetime.date.today()}", "",
-             f"Machine: {cpu}, {os.cpu_count()} cores, {platform.platform()}.",
+             f"Machine: {machine()}.",
              f"Scene: {a.shape}, {a.material} box under gravity ({a.formulation}), 2x2(x2) particles per cell, MUSL, {a.steps} steps"
              + "".join(f", `{x}`" for x in a.set) + ". "
              f"Time per particle-step is the time loop's (run.json loop_us_per_particle_step); best and median of {a.repeat} runs.", "",
@@ -169,9 +162,24 @@ def main():
     for (name, dim, parts, t, steps, us, med, mem, st) in rows:
         total = sum(st.values())
         lines.append(f"- {name}, {t} thread(s): " + ", ".join(f"{k} {100*v/total:.1f}%" for k, v in st.items()))
+    emit(lines, a.out)
+
+def machine():
+    """The CPU model, cores and platform, for a results file's header."""
+    cpu = "unknown"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip(); break
+    except OSError:
+        pass
+    return f"{cpu}, {os.cpu_count()} cores, {platform.platform()}"
+
+def emit(lines, out):
+    """Prints a Markdown report and writes it to `out` (if given)."""
     text = "\n".join(lines) + "\n"
-    if a.out:
-        with open(a.out, "w") as f:
+    if out:
+        with open(out, "w") as f:
             f.write(text)
     print(text)
 

@@ -187,7 +187,7 @@ GridBoundary<Dim> GridBoundary<Dim>::fluid(const scene::Scene& s, const Grid<Dim
 }
 
 template <int Dim>
-void GridBoundary<Dim>::apply(const Grid<Dim>& g, const NodeBox<Dim>& box, std::vector<Vec<Dim>>& v,
+void GridBoundary<Dim>::apply(const Grid<Dim>& g, const NodeBox<Dim>& box, NodeArray<Vec<Dim>>& v,
                               bool with_friction) const {
   for (const Face& face : faces_) {
     const int i_face = face.side == 0 ? 0 : g.nodes_per_axis()[face.axis] - 1;

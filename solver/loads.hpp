@@ -58,7 +58,7 @@ class GridBoundary {
   /// Enforces the conditions on v for nodes of `box` that lie on a constrained face, and on the
   /// nodes of named surfaces. Friction acts only when `with_friction` (on the end-of-step
   /// velocity; the start-of-step velocity only gets the kinematic constraints).
-  void apply(const Grid<Dim>& g, const NodeBox<Dim>& box, std::vector<Vec<Dim>>& v, bool with_friction) const;
+  void apply(const Grid<Dim>& g, const NodeBox<Dim>& box, NodeArray<Vec<Dim>>& v, bool with_friction) const;
   const std::vector<Face>& faces() const { return faces_; }
   const std::vector<SurfaceNode>& surface_nodes() const { return nodes_; }
 

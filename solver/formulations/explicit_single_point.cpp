@@ -94,8 +94,8 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     }
     solid_.resize(grid_.num_nodes());
     fluid_.resize(grid_.num_nodes());
-    drag_.assign(grid_.num_nodes(), 0.0);
-    if (conservative_) porosity_.assign(grid_.num_nodes(), {0.0, 0.0});
+    drag_.resize(grid_.num_nodes());  // zero (NodeArray)
+    if (conservative_) porosity_.resize(grid_.num_nodes());
     stress_scale0_ = initial_stress_scale(s, state.solid);
   }
 
@@ -553,7 +553,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   explicit_single_point::CellPressure<Dim> cells_;  // (1b), (7) with the cell-constant pressure
   explicit_single_point::StrainSmoothing<Dim> smoothing_stage_;  // (6), eqs. 26-27
   std::vector<double> vol_rate_;                     // per particle: r_p
-  std::vector<std::array<double, 2>> porosity_;      // per node: sum N m n -> n_I, sum N m
+  NodeArray<std::array<double, 2>> porosity_;        // per node: sum N m n -> n_I, sum N m
   std::vector<double> nhat_, flux_;                  // per particle: n^, grad n^ . (v_f - v_s)
   std::vector<Vec<Dim>> grad_n_;                     // per particle: grad n^
   std::vector<std::unique_ptr<MaterialModel<Dim>>> materials_;
@@ -561,7 +561,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   std::vector<std::vector<int>> material_particles_;
   std::vector<PoreFluid> pore_;  // per solid material
   NodeFields<Dim> solid_, fluid_;
-  std::vector<double> drag_;                         // per node
+  NodeArray<double> drag_;                           // per node
   // The multi-field variational step of each basis order (only the scene's is used).
   NodeProjection<Dim, S, 0, LeverageLimit::off> mfvp0_;
   NodeProjection<Dim, S, 1, LeverageLimit::off> mfvp1_;

@@ -1,6 +1,8 @@
 // Helpers every formulation uses at construction, and the shape-function dispatch (done once).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <vector>
@@ -112,12 +114,12 @@ double fixed_order_sum(std::size_t n, F&& f) {
   return total;
 }
 
-/// Number of distinct cells that hold a particle.
+/// Number of distinct cells that hold a particle (sorted cell indices: the cost follows the
+/// particles, not the grid).
 template <int Dim>
 std::size_t count_active_cells(const Grid<Dim>& g, const ParticleSet<Dim>& ps) {
-  std::size_t cells = 1;
-  for (int a = 0; a < Dim; ++a) cells *= static_cast<std::size_t>(g.axis(a).cells);
-  std::vector<char> used(cells, 0);
+  std::vector<std::size_t> cells;
+  cells.reserve(ps.size());
   for (const auto& x : ps.x) {
     std::size_t idx = 0;
     for (int a = Dim - 1; a >= 0; --a) {
@@ -125,11 +127,10 @@ std::size_t count_active_cells(const Grid<Dim>& g, const ParticleSet<Dim>& ps) {
       const int c = std::isfinite(xi) ? std::clamp(static_cast<int>(std::floor(xi)), 0, g.axis(a).cells - 1) : 0;
       idx = idx * g.axis(a).cells + c;
     }
-    used[idx] = 1;
+    cells.push_back(idx);
   }
-  std::size_t count = 0;
-  for (char u : used) count += u;
-  return count;
+  std::sort(cells.begin(), cells.end());
+  return static_cast<std::size_t>(std::unique(cells.begin(), cells.end()) - cells.begin());
 }
 
 /// Calls fn.template operator()<Shape>() with the shape-function policy the scene names.

@@ -21,6 +21,7 @@
 
 #include "scene/scene.hpp"
 #include "solver/common.hpp"
+#include "solver/grid/node_array.hpp"
 
 namespace swmpm {
 
@@ -34,7 +35,8 @@ struct Axis {
 };
 
 /// Nodal fields of one phase. What P2G accumulates (m, mv, f) sits together in one struct per
-/// node, so a particle's scatter touches one cache line per node rather than three.
+/// node, so a particle's scatter touches one cache line per node rather than three. NodeArrays:
+/// memory only for the nodes the steps' boxes reach (grid/node_array.hpp).
 template <int Dim>
 struct NodeFields {
   struct Accum {
@@ -42,14 +44,15 @@ struct NodeFields {
     Vec<Dim> f;   // N, total force (internal + external + body)
     double m;     // kg, lumped mass
   };
-  std::vector<Accum> acc;
-  std::vector<Vec<Dim>> v;    // m/s, velocity at the end of the step (after BCs)
-  std::vector<Vec<Dim>> vL;   // m/s, velocity at the start of the step ("Lagrangian" v^L)
+  NodeArray<Accum> acc;
+  NodeArray<Vec<Dim>> v;    // m/s, velocity at the end of the step (after BCs)
+  NodeArray<Vec<Dim>> vL;   // m/s, velocity at the start of the step ("Lagrangian" v^L)
 
+  /// All zero; called once, at construction.
   void resize(std::size_t n) {
-    acc.assign(n, Accum{Vec<Dim>::Zero(), Vec<Dim>::Zero(), 0.0});
-    v.assign(n, Vec<Dim>::Zero());
-    vL.assign(n, Vec<Dim>::Zero());
+    acc = NodeArray<Accum>(n);
+    v = NodeArray<Vec<Dim>>(n);
+    vL = NodeArray<Vec<Dim>>(n);
   }
 };
 

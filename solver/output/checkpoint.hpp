@@ -34,14 +34,14 @@ class Checkpoint {
   /// Adds an array of trivially copyable elements under `name` (copied into the checkpoint).
   /// Elements are copied as bytes: plain numbers, std::array and Eigen's fixed-size matrices
   /// (which the type trait does not call trivially copyable, but which hold only their numbers).
-  template <class T>
-  void put(const std::string& name, const std::vector<T>& v) {
+  template <class T, class Alloc>
+  void put(const std::string& name, const std::vector<T, Alloc>& v) {
     static_assert(std::is_trivially_destructible_v<T> && std::is_standard_layout_v<T>);
     put_bytes(name, sizeof(T), v.size(), v.data());
   }
   /// The array stored under `name`; throws CheckpointError when it is missing or of another type.
-  template <class T>
-  void get(const std::string& name, std::vector<T>& v) const {
+  template <class T, class Alloc>
+  void get(const std::string& name, std::vector<T, Alloc>& v) const {
     static_assert(std::is_trivially_destructible_v<T> && std::is_standard_layout_v<T>);
     const Section& s = find(name, sizeof(T));
     v.resize(s.count);

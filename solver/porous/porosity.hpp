@@ -29,7 +29,7 @@ enum class PorosityWeight { mass, volume };
 template <int Dim, int S, bool G>
 void nodal_porosity(const Grid<Dim>& g, const NodeBox<Dim>& box, const StripeSchedule& schedule,
                     const std::vector<shape::ShapeData<Dim, S, G>>& sd, const ParticleSet<Dim>& ps,
-                    PorosityWeight weight, double empty, std::vector<std::array<double, 2>>& sums) {
+                    PorosityWeight weight, double empty, NodeArray<std::array<double, 2>>& sums) {
   schedule.run([&](int p) {
     const double w = weight == PorosityWeight::mass ? ps.m[p] : ps.V[p], wn = w * ps.n[p];
     shape::for_each_node(g, sd[p], [&](std::size_t i, double N, const auto&) {
@@ -54,7 +54,7 @@ struct PorosityAtPoint {
 };
 template <int Dim, int S>
 PorosityAtPoint<Dim, S> porosity_at_point(const Grid<Dim>& g, const shape::ShapeData<Dim, S>& sd,
-                                          const std::vector<std::array<double, 2>>& sums) {
+                                          const NodeArray<std::array<double, 2>>& sums) {
   double nh = 0.0, wsum = 0.0;
   Vec<Dim> grad = Vec<Dim>::Zero();
   shape::for_each_node(g, sd, [&](std::size_t i, double N, const Vec<Dim>& dN) {

@@ -69,7 +69,7 @@ class CellMoments {
     h_ = _mm_set_pd(g.axis(1).h, g.axis(0).h);
 #endif
     for (int a = 0; a < 2; ++a) build_axis(g.axis(a), tables_[a]);
-    moments_.assign(static_cast<std::size_t>(nn_[0]) * nn_[1] * 3 * QQ, 0.0);
+    moments_.resize(static_cast<std::size_t>(nn_[0]) * nn_[1] * 3 * QQ);  // zero (NodeArray)
   }
 
   /// When every point's L weight is cl = cs / rho_s + cw / rho_w with the same densities (one
@@ -271,7 +271,7 @@ class CellMoments {
   __m128d origin_, h_;  // per axis (add)
 #endif
   std::array<std::vector<AxisCell>, 2> tables_;
-  std::vector<double> moments_;  // per cell (indexed by its first node): soil, water, L sets of QQ
+  NodeArray<double> moments_;  // per cell (indexed by its first node): soil, water, L sets of QQ
 };
 
 }  // namespace swmpm::transfer

@@ -121,7 +121,7 @@ class FBar {
     ParticleSet<Dim>& ps = st.solid;
     const long n = static_cast<long>(ps.size());
     dJ_.resize(ps.size());
-    if (node_.size() != g.num_nodes()) node_.assign(g.num_nodes(), {0.0, 0.0});
+    if (node_.size() != g.num_nodes()) node_ = NodeArray<std::array<double, 2>>(g.num_nodes());  // zero until used
     // (9)(c) ΔJ = det ΔF; eq. 80's nodal sums Σ N m, Σ N m ΔJ through the schedule.
     g.parallel_for_each_node(box, [&](std::size_t i, const auto&) { node_[i] = {0.0, 0.0}; });
     schedule.run([&](int p) {
@@ -206,7 +206,7 @@ class FBar {
   Vec<Dim> origin_ = Vec<Dim>::Zero();   // m, the lattice's corner (grid.min)
   std::array<int, Dim> per_axis_{};      // patches per axis
   std::size_t patches_ = 0;
-  std::vector<std::array<double, 2>> node_;  // per node: Σ N m, Σ N m ΔJ (then the average ΔJ)
+  NodeArray<std::array<double, 2>> node_;  // per node: Σ N m, Σ N m ΔJ (then the average ΔJ)
   StripeSchedule by_patch_;              // particles by row of patches (width 1: one row per "stripe")
   std::vector<double> dJ_, ev_;          // per particle: ΔJ, ε_v^e
   std::vector<int> patch_;               // per particle

@@ -56,8 +56,10 @@ class NodeProjection {
   void fit(const Grid<Dim>& g, const NodeBox<Dim>& box, const StripeSchedule& schedule,
            const std::vector<shape::ShapeData<Dim, S, G>>& sd, const std::vector<Vec<Dim>>& x, Weight&& weight,
            Value&& value) {
-    if (blocks_.size() != g.num_nodes() * NB) blocks_.assign(g.num_nodes() * NB, 0.0);
-    if (well_posed_.size() != g.num_nodes()) well_posed_.assign(g.num_nodes(), 0);
+    if (well_posed_.size() != g.num_nodes()) {  // first fit (or another grid): zero, memory only where used
+      blocks_ = NodeArray<double>(g.num_nodes() * NB);
+      well_posed_ = NodeArray<std::uint8_t>(g.num_nodes());
+    }
     g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
       std::fill_n(block(i), NB, 0.0);
       well_posed_[i] = 0;
@@ -236,8 +238,8 @@ class NodeProjection {
 
   static constexpr double kMaxLeverage = 100.0;  // largest leverage W (H^-1)_00 of an own linear fit
 
-  std::vector<double> blocks_;  // per node: packed upper triangle of H_I, then rhs -> a_I
-  std::vector<std::uint8_t> well_posed_;  // per node: 1 when the last fit was well posed (Order 1)
+  NodeArray<double> blocks_;  // per node: packed upper triangle of H_I, then rhs -> a_I
+  NodeArray<std::uint8_t> well_posed_;  // per node: 1 when the last fit was well posed (Order 1)
 };
 
 }  // namespace swmpm

@@ -197,14 +197,14 @@ TEST(Porous, NodalPorosityMassAndVolumeWeighted) {
   s.evaluate();
   const int nx = s.g.nodes_per_axis()[0];
   const std::size_t n11 = static_cast<std::size_t>(1 * nx + 1), n21 = n11 + 1;
-  std::vector<std::array<double, 2>> sums(s.nodes(), {0.0, 0.0});
+  NodeArray<std::array<double, 2>> sums(s.nodes());  // zero
   porous::nodal_porosity(s.g, s.box, s.schedule, s.sd, s.ps, porous::PorosityWeight::mass, 1.0, sums);
   // Node (1, 1): S = 0.75 0.5 and 0.25 0.5; n = (0.375 2 0.3 + 0.125 1 0.5) / (0.375 2 + 0.125 1).
   EXPECT_NEAR(sums[n11][0], (0.375 * 2 * 0.3 + 0.125 * 1 * 0.5) / (0.375 * 2 + 0.125), 1e-15);
   // Node (2, 1): S = 0.125 and 0.375.
   EXPECT_NEAR(sums[n21][0], (0.125 * 2 * 0.3 + 0.375 * 1 * 0.5) / (0.125 * 2 + 0.375), 1e-15);
   EXPECT_EQ(sums[0][0], 1.0);  // no soil: `empty`
-  std::vector<std::array<double, 2>> vol(s.nodes(), {0.0, 0.0});
+  NodeArray<std::array<double, 2>> vol(s.nodes());
   porous::nodal_porosity(s.g, s.box, s.schedule, s.sd, s.ps, porous::PorosityWeight::volume, 0.0, vol);
   EXPECT_NEAR(vol[n11][0], (0.375 * 0.1 * 0.3 + 0.125 * 0.3 * 0.5) / (0.375 * 0.1 + 0.125 * 0.3), 1e-15);
   EXPECT_EQ(vol[0][0], 0.0);

@@ -39,7 +39,7 @@ std::size_t cell_count(const Grid<Dim>& g) {
 template <int Dim>
 class StrainSmoothing {
  public:
-  explicit StrainSmoothing(const Grid<Dim>& g) : sum_(cell_count(g), {0.0, 0.0, 0.0, 0.0}) {}
+  explicit StrainSmoothing(const Grid<Dim>& g) : sum_(cell_count(g)) {}  // zero (NodeArray)
 
   void apply(const Grid<Dim>& g, ParticleSet<Dim>& ps, std::vector<double>& div_f) {
     const std::size_t n = ps.size();
@@ -66,7 +66,7 @@ class StrainSmoothing {
 
  private:
   std::vector<std::size_t> cell_;             // per particle
-  std::vector<std::array<double, 4>> sum_;    // per cell: sum m div v_s, sum m_s, sum m_f div v_f, sum m_f
+  NodeArray<std::array<double, 4>> sum_;      // per cell: sum m div v_s, sum m_s, sum m_f div v_f, sum m_f
 };
 
 /// The cell-constant pore pressure: one pressure per grid cell, p_c = sum S_p p_p / sum S_p over

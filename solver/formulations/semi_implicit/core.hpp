@@ -113,8 +113,8 @@ class Core : public Formulation<Dim> {
     soil_.resize(nodes);
     water_.resize(nodes);
     node_.assign(nodes, NodeExtra{});
-    A_soil_.assign(nodes, Vec<Dim>::Zero());
-    A_water_.assign(nodes, Vec<Dim>::Zero());
+    A_soil_.resize(nodes);  // zero (NodeArray)
+    A_water_.resize(nodes);
   }
 
   // ---- the stages of a step ------------------------------------------------------------------
@@ -496,7 +496,7 @@ class Core : public Formulation<Dim> {
   NodeBox<Dim> box_;
   NodeFields<Dim> soil_, water_;
   std::vector<NodeExtra> node_;
-  std::vector<Vec<Dim>> A_soil_, A_water_;  // per node: M v^t + dt f of each phase (implicit drag)
+  NodeArray<Vec<Dim>> A_soil_, A_water_;  // per node: M v^t + dt f of each phase (implicit drag)
   Pressure pressure_;
   std::vector<shape::ShapeData<Dim, S>> sd_;
   std::vector<FaceForce<Dim, S>> face_forces_;

@@ -44,7 +44,7 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
     for (std::size_t k = 0; k < s.materials.size(); ++k)
       if (s.materials[k].model == scene::MaterialModel::fluid) rho_w_points_[k] = s.materials[k].at("density");
     const std::size_t nodes = grid_.num_nodes();
-    water_sums_.assign(nodes, WaterSums{});
+    water_sums_.resize(nodes);  // zero (NodeArray)
     support_.resize(nodes);
     for (std::size_t i = 0; i < nodes; ++i) support_[i] = porous::basis_integral<Shape>(grid_, i);
     const ParticleSet<Dim>& ws = state.fluid;
@@ -301,10 +301,17 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
   /// point order (the same numbers with any number of threads); frames are rare.
   void complete_water_porosity(const ParticleSet<Dim>& ps, ParticleSet<Dim>& ws) {
     long bad = -1;
-    transfer::evaluate_shapes<Shape>(grid_, ps, out_sd_, bad);
-    transfer::evaluate_shapes<Shape>(grid_, ws, out_sdw_, bad);
-    out_m_.assign(grid_.num_nodes(), 0.0);
-    out_mn_.assign(grid_.num_nodes(), 0.0);
+    NodeBox<Dim> box = transfer::evaluate_shapes<Shape>(grid_, ps, out_sd_, bad);
+    const NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, ws, out_sdw_, bad);
+    for (int a = 0; a < Dim; ++a) {
+      box.lo[a] = std::min(box.lo[a], wbox.lo[a]);
+      box.hi[a] = std::max(box.hi[a], wbox.hi[a]);
+    }
+    if (out_m_.empty()) {  // zero (NodeArray): memory only for the nodes the boxes reach
+      out_m_.resize(grid_.num_nodes());
+      out_mn_.resize(grid_.num_nodes());
+    }
+    grid_.for_each_node(box, [&](std::size_t i, const auto&) { out_m_[i] = out_mn_[i] = 0.0; });  // all the sets reach
     for (std::size_t p = 0; p < ps.size(); ++p) {
       const double m = ps.m[p], mn = m * ps.n[p];
       shape::for_each_node(grid_, out_sd_[p], [&](std::size_t i, double N, const auto&) {
@@ -359,11 +366,11 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
   std::vector<char> escaped_;          // per water point, this step (reused)
   long escaped_points_ = 0;            // removed so far
   double escaped_mass_ = 0.0;          // kg (per metre in 2D), removed so far
-  std::vector<WaterSums> water_sums_;  // zero between steps (scatter_water_points)
+  NodeArray<WaterSums> water_sums_;  // zero between steps (scatter_water_points)
   std::vector<double> support_;        // per node: integral of its basis function over the grid
   std::vector<shape::ShapeData<Dim, S, !kCellMoments>> sdw_;       // weights only with the cell moments
   std::vector<shape::ShapeData<Dim, S, false>> out_sd_, out_sdw_;  // complete_water_porosity (output only)
-  std::vector<double> out_m_, out_mn_;                             // per node, complete_water_porosity
+  NodeArray<double> out_m_, out_mn_;                               // per node, complete_water_porosity
   bool output_fields_stale_ = false;  // the soil points' p and v_f lag the last step (complete_output_fields)
   bool water_output_stale_ = false;   // the water points' n and V lag the last step
   StripeSchedule wschedule_;

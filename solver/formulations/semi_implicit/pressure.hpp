@@ -65,9 +65,9 @@ class PressureStep {
       : grid_(g), box_(box), remap_(remap), face_drained_(face_drained), face_pressure_(face_pressure),
         poisson_(g), surface_(g.num_nodes()) {
     const std::size_t nodes = g.num_nodes();
-    p_node_.assign(nodes, 0.0);
-    D_solid_.assign(nodes * KD, Vec<Dim>::Zero());
-    D_water_.assign(nodes * KD, Vec<Dim>::Zero());
+    p_node_.resize(nodes);  // zero (NodeArray: memory only where the steps' boxes reach)
+    D_solid_.resize(nodes * KD);
+    D_water_.resize(nodes * KD);
     if constexpr (kCellMoments) moments_ = std::make_unique<Moments>(g);
     d_steps_ = DSt::steps(g.nodes_per_axis());
   }
@@ -78,8 +78,8 @@ class PressureStep {
   Moments& moments() { return *moments_; }
   bool laplace_derived() const { return kCellMoments && moments_->laplace_derived(); }
   Remap remap() const { return remap_; }
-  const std::vector<double>& p_node() const { return p_node_; }
-  const std::vector<double>& dp() const { return poisson_.dp(); }
+  const NodeArray<double>& p_node() const { return p_node_; }
+  const NodeArray<double>& dp() const { return poisson_.dp(); }
   /// p^t at node i from the linear projection of the points' pressures.
   double p_at_node(std::size_t i) const { return linear_.at_node(i); }
   bool drained(int f) const { return face_drained_[f]; }
@@ -241,7 +241,7 @@ class PressureStep {
   /// field q in the strong form of eqs. 67-68, G^s_KJ = sum_sp (1 - n) V S_K grad S_J = D^s_KJ
   /// (equal-order pressure and velocity shapes: G is D read with the roles of I and J swapped),
   /// i.e. f_s = -sum_sp (1 - n) V S_K grad q(x_sp).
-  void add_pressure_force(std::size_t k, const std::array<int, Dim>& ijk, const std::vector<double>& q, Vec<Dim>& fs,
+  void add_pressure_force(std::size_t k, const std::array<int, Dim>& ijk, const NodeArray<double>& q, Vec<Dim>& fs,
                           Vec<Dim>& fw) const {
     const Vec<Dim>* Ds_k = D_solid_.data() + k * KD;
     const Vec<Dim>* Dw_k = D_water_.data() + k * KD;
@@ -391,8 +391,8 @@ class PressureStep {
   std::array<double, 6> face_pressure_;  // Pa, prescribed p on drained faces (0 unless `pressure`)
   Poisson poisson_;
   porous::SupportCut<Dim, Shape> surface_;
-  std::vector<double> p_node_;               // Pa, per node: p^t from the linear projection of the points' pressures
-  std::vector<Vec<Dim>> D_solid_, D_water_;  // per node: row I of D^s, D^w over the D stencil
+  NodeArray<double> p_node_;               // Pa, per node: p^t from the linear projection of the points' pressures
+  NodeArray<Vec<Dim>> D_solid_, D_water_;  // per node: row I of D^s, D^w over the D stencil
   std::unique_ptr<Moments> moments_;         // kCellMoments only
   std::array<long, KD> d_steps_{};
   NodeProjection<Dim, S, 1> linear_;

@@ -47,12 +47,13 @@ class PressurePoisson {
 
   explicit PressurePoisson(const Grid<Dim>& g) : nodes_(g.nodes_per_axis()), step_(St::steps(g.nodes_per_axis())) {
     const std::size_t n = g.num_nodes();
-    stencil_.assign(n * K, 0.0);
-    rhs_.assign(n, 0.0);
-    dp_.assign(n, 0.0);
-    role_.assign(n, inactive);
+    // Zero (inactive, no equation) until a step's box reaches them: NodeArray, memory only there.
+    stencil_.resize(n * K);
+    rhs_.resize(n);
+    dp_.resize(n);
+    role_.resize(n);
+    member_.resize(n);
     eq_.assign(n, -1);
-    member_.assign(n, 0);
     last_unknown_.assign(n, std::numeric_limits<long>::min() / 2);
   }
 
@@ -244,7 +245,7 @@ class PressurePoisson {
 
   /// The increment at node i (after solve).
   double dp(std::size_t i) const { return dp_[i]; }
-  const std::vector<double>& dp() const { return dp_; }
+  const NodeArray<double>& dp() const { return dp_; }
   int unknown_count() const { return unknown_count_; }
   long factorisations() const { return factorisations_; }
   long cg_iterations() const { return cg_iterations_; }
@@ -306,11 +307,11 @@ class PressurePoisson {
 
   std::array<int, Dim> nodes_;
   std::array<long, K> step_{};
-  std::vector<double> stencil_;  // per node: row of L over the stencil
-  std::vector<double> rhs_, dp_;
-  std::vector<std::uint8_t> role_;
+  NodeArray<double> stencil_;  // per node: row of L over the stencil
+  NodeArray<double> rhs_, dp_;
+  NodeArray<std::uint8_t> role_;
   std::vector<int> eq_, equations_, pattern_nodes_;
-  std::vector<std::uint8_t> member_;  // per node: has an equation in the current pattern
+  NodeArray<std::uint8_t> member_;  // per node: has an equation in the current pattern
   std::vector<long> last_unknown_;    // per node: the solve at which it was last unknown
   long solves_ = 0;
   NodeBox<Dim> cleared_ = empty_box();  // the box of the last clear()
