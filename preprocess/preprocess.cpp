@@ -1,9 +1,12 @@
 #include "preprocess/preprocess.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -166,6 +169,29 @@ void reject_free_water(const scene::Scene& s, const std::vector<BodyContent>& co
                                "does not model free water either)"});
 }
 
+/// A soil body whose water table lies at or below every one of its points would be dry throughout:
+/// its `fluid` would model nothing, and a coupled formulation would find no water. Refused, naming
+/// the table; a body above the water is written without a fluid.
+void reject_tables_below_bodies(const scene::Scene& s, const std::vector<SeedPoint>& points) {
+  std::vector<double> lowest(s.bodies.size(), std::numeric_limits<double>::infinity());  // m, lowest centre
+  std::vector<char> any_wet(s.bodies.size(), 0);
+  for (const auto& p : points) {
+    const auto b = static_cast<std::size_t>(p.body);
+    lowest[b] = std::min(lowest[b], p.x[1]);
+    any_wet[b] = any_wet[b] || !p.above_water_table;
+  }
+  for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+    const auto& body = s.bodies[b];
+    if (any_wet[b] || !std::isfinite(lowest[b]) || body.solid.empty() || !body.initial.water_table) continue;
+    std::ostringstream os;
+    os << s.source_file << ": /bodies/" << b << "/initial/water_table: got " << *body.initial.water_table
+       << ", at or below every point of body \"" << body.name << "\" (the lowest lies at y = " << lowest[b]
+       << " m), so the body would hold no water; expected a table above its lowest point, or the body without "
+          "\"fluid\" and \"pore_pressure\" (a dry body)";
+    throw scene::SceneError({os.str()});
+  }
+}
+
 /// Indices of the points whose content (content_of) satisfies `keep`.
 template <class Keep>
 std::vector<std::size_t> select(const std::vector<SeedPoint>& points, const std::vector<BodyContent>& content,
@@ -321,6 +347,7 @@ Phases seed_phases(const scene::Scene& s) {
   const std::vector<std::unique_ptr<Shape>> shapes = make_shapes(s);
   scene::check_memory(s, s.source_file, body_counts(s, shapes), limit);
   const std::vector<SeedPoint> points = seed_points(s, shapes);
+  reject_tables_below_bodies(s, points);
   const InitialFields init = initial_state(s, points, content);
 
   Phases out;
