@@ -65,22 +65,6 @@ void check_bodies(const scene::Scene& s, const std::vector<BodyContent>& content
   }
 }
 
-/// Height [m] of each body's hydrostatic water table (p = 0): `water_table` when given, else the
-/// top of the body's points (highest centre plus half a spacing). NaN for other bodies.
-std::vector<double> water_tables(const scene::Scene& s, const std::vector<SeedPoint>& points) {
-  std::vector<double> wt(s.bodies.size(), not_hydrostatic);
-  std::vector<double> top(s.bodies.size(), -std::numeric_limits<double>::infinity());
-  for (const auto& p : points) {
-    auto& t = top[static_cast<std::size_t>(p.body)];
-    t = std::max(t, p.x[1] + 0.5 * p.spacing);
-  }
-  for (std::size_t b = 0; b < s.bodies.size(); ++b) {
-    const auto& init = s.bodies[b].initial;
-    if (init.hydrostatic) wt[b] = init.water_table ? *init.water_table : top[b];
-  }
-  return wt;
-}
-
 /// A point's lattice segment [y - s/2, y + s/2] in one vertical column.
 struct ColumnEntry {
   std::int64_t column;
@@ -166,7 +150,7 @@ ColumnIntegrals integrate_columns(const scene::Scene& s, const std::vector<SeedP
       const ColumnEntry& e = begin[static_cast<std::ptrdiff_t>(k)];
       if (!e.home) continue;
       const SeedPoint& p = points[e.point];
-      const BodyContent& c = content_of(content, p);
+      const BodyContent c = content_of(content, p);
       out.weight[e.point] = g * (mass_above[k] + c.bulk_density() * 0.5 * p.spacing);
       const double wt = water_table[static_cast<std::size_t>(p.body)];
       if (!std::isnan(wt) && wt > p.x[1])
@@ -178,6 +162,20 @@ ColumnIntegrals integrate_columns(const scene::Scene& s, const std::vector<SeedP
 }
 
 }  // namespace
+
+std::vector<double> water_tables(const scene::Scene& s, const std::vector<SeedPoint>& points) {
+  std::vector<double> wt(s.bodies.size(), not_hydrostatic);
+  std::vector<double> top(s.bodies.size(), -std::numeric_limits<double>::infinity());
+  for (const auto& p : points) {
+    auto& t = top[static_cast<std::size_t>(p.body)];
+    t = std::max(t, p.x[1] + 0.5 * p.spacing);
+  }
+  for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+    const auto& init = s.bodies[b].initial;
+    if (init.hydrostatic) wt[b] = init.water_table ? *init.water_table : top[b];
+  }
+  return wt;
+}
 
 BodyContent body_content(const scene::Scene& s, std::size_t b) {
   const auto& body = s.bodies[b];
@@ -219,7 +217,7 @@ InitialFields initial_state(const scene::Scene& s, const std::vector<SeedPoint>&
   for (std::size_t p = 0; p < points.size(); ++p) {
     const auto b = static_cast<std::size_t>(points[p].body);
     const auto& init = s.bodies[b].initial;
-    const BodyContent& c = content[b];
+    const BodyContent c = content_of(content, points[p]);  // dry above a hydrostatic body's water table
     const double y = points[p].x[1];
     if (c.has_fluid()) {
       // Hydrostatic: p = rho_w g (y_wt - y) below the table; 0 above it (no suction).

@@ -27,15 +27,24 @@ struct BodyContent {
   bool has_fluid() const { return rho_w > 0.0; }
   /// Total (bulk) density [kg/m^3]: the weight per volume the column above a point adds.
   double bulk_density() const { return solid_density + fluid_density; }
+  /// The same skeleton with empty pores (no suction): (1 - n) rho_s, no fluid.
+  BodyContent dry() const { return {porosity, solid_density, 0.0, 0.0}; }
 };
 
 /// The content of body `b` (initial.porosity overrides the material's porosity).
 BodyContent body_content(const scene::Scene& s, std::size_t b);
 
-/// The content of the body point `p` belongs to.
-inline const BodyContent& content_of(const std::vector<BodyContent>& content, const SeedPoint& p) {
-  return content[static_cast<std::size_t>(p.body)];
+/// The content of point `p`: its body's, or the body's dry skeleton where the point lies at or
+/// above the body's water table (SeedPoint::above_water_table).
+inline BodyContent content_of(const std::vector<BodyContent>& content, const SeedPoint& p) {
+  const BodyContent& c = content[static_cast<std::size_t>(p.body)];
+  return p.above_water_table ? c.dry() : c;
 }
+
+/// Height [m] of each body's hydrostatic water table (p = 0): `water_table` when given, else the
+/// top of the body's points (highest centre plus half a spacing). NaN for bodies without a
+/// hydrostatic pore pressure.
+std::vector<double> water_tables(const scene::Scene& s, const std::vector<SeedPoint>& points);
 
 /// Initial fields per seeded point, in the order of the points.
 struct InitialFields {

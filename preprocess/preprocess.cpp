@@ -1,9 +1,12 @@
 #include "preprocess/preprocess.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -125,7 +128,7 @@ std::vector<SeedPoint> seed_points(const scene::Scene& s, const std::vector<std:
             }
           // Named surfaces: bit 6 + k when within one lattice spacing of the k-th named surface.
           faces |= named_surface_bits(surface_bits, *shapes[b], x, dx);
-          seeded.push_back({x, static_cast<int>(b), dx, faces});
+          seeded.push_back({x, static_cast<int>(b), dx, faces, false});
         }
   }
 
@@ -139,6 +142,14 @@ std::vector<SeedPoint> seed_points(const scene::Scene& s, const std::vector<std:
     if (!overwritten) kept.push_back(p);
   }
 
+  // Water only where there is water: the soil of a hydrostatic body is dry above its water table
+  // (free water is water wherever it is seeded).
+  const std::vector<double> table = water_tables(s, kept);
+  for (auto& p : kept) {
+    const auto& body = s.bodies[static_cast<std::size_t>(p.body)];
+    const double wt = table[static_cast<std::size_t>(p.body)];
+    p.above_water_table = !body.solid.empty() && !body.fluid.empty() && !std::isnan(wt) && p.x[1] >= wt;
+  }
   return kept;
 }
 
@@ -158,12 +169,36 @@ void reject_free_water(const scene::Scene& s, const std::vector<BodyContent>& co
                                "does not model free water either)"});
 }
 
-/// Indices of the points whose body satisfies `keep`.
+/// A soil body whose water table lies at or below every one of its points would be dry throughout:
+/// its `fluid` would model nothing, and a coupled formulation would find no water. Refused, naming
+/// the table; a body above the water is written without a fluid.
+void reject_tables_below_bodies(const scene::Scene& s, const std::vector<SeedPoint>& points) {
+  std::vector<double> lowest(s.bodies.size(), std::numeric_limits<double>::infinity());  // m, lowest centre
+  std::vector<char> any_wet(s.bodies.size(), 0);
+  for (const auto& p : points) {
+    const auto b = static_cast<std::size_t>(p.body);
+    lowest[b] = std::min(lowest[b], p.x[1]);
+    any_wet[b] = any_wet[b] || !p.above_water_table;
+  }
+  for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+    const auto& body = s.bodies[b];
+    if (any_wet[b] || !std::isfinite(lowest[b]) || body.solid.empty() || !body.initial.water_table) continue;
+    std::ostringstream os;
+    os << s.source_file << ": /bodies/" << b << "/initial/water_table: got " << *body.initial.water_table
+       << ", at or below every point of body \"" << body.name << "\" (the lowest lies at y = " << lowest[b]
+       << " m), so the body would hold no water; expected a table above its lowest point, or the body without "
+          "\"fluid\" and \"pore_pressure\" (a dry body)";
+    throw scene::SceneError({os.str()});
+  }
+}
+
+/// Indices of the points whose content (content_of) satisfies `keep`.
 template <class Keep>
-std::vector<std::size_t> select(const std::vector<SeedPoint>& points, Keep&& keep) {
+std::vector<std::size_t> select(const std::vector<SeedPoint>& points, const std::vector<BodyContent>& content,
+                                Keep&& keep) {
   std::vector<std::size_t> out;
   for (std::size_t p = 0; p < points.size(); ++p)
-    if (keep(static_cast<std::size_t>(points[p].body))) out.push_back(p);
+    if (keep(content_of(content, points[p]))) out.push_back(p);
   return out;
 }
 
@@ -213,7 +248,7 @@ scene::PointCloud particle_cloud(const scene::Scene& s, const std::vector<SeedPo
 scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint>& points,
                               const std::vector<BodyContent>& content, const InitialFields& init,
                               const WaterLayout& w) {
-  const auto sel = select(points, [&](std::size_t b) { return content[b].has_solid(); });
+  const auto sel = select(points, content, [](const BodyContent& c) { return c.has_solid(); });
   scene::PointCloud c = particle_cloud(
       s, points, sel, content, [](const BodyContent& bc) { return bc.solid_density; },
       [&](const scene::Body& b) { return static_cast<double>(s.material_index(b.solid)); });
@@ -232,7 +267,8 @@ scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint
     for (std::size_t k = 0; k < sel.size(); ++k) pore_pressure.values[k] = init.pore_pressure[sel[k]];
   }
   if (w.pore_fluid_on_solid) {
-    // Pore fluid of the same points; a dry body in a coupled scene has none (fluid_material -1).
+    // Pore fluid of the same points; a dry body in a coupled scene, and the soil above a
+    // hydrostatic body's water table, have none (fluid_mass 0, fluid_material -1).
     const auto& volume = c.get("volume", "solid");
     auto& pore_pressure = c.add("pore_pressure", 1);
     auto& fluid_mass = c.add("fluid_mass", 1);
@@ -240,9 +276,10 @@ scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint
     for (std::size_t k = 0; k < sel.size(); ++k) {
       const auto& sp = points[sel[k]];
       const auto& body = s.bodies[static_cast<std::size_t>(sp.body)];
+      const BodyContent bc = content_of(content, sp);
       pore_pressure.values[k] = init.pore_pressure[sel[k]];
-      fluid_mass.values[k] = content_of(content, sp).fluid_density * volume.values[k];
-      fluid_material.values[k] = body.fluid.empty() ? -1.0 : s.material_index(body.fluid);
+      fluid_mass.values[k] = bc.fluid_density * volume.values[k];
+      fluid_material.values[k] = bc.has_fluid() ? static_cast<double>(s.material_index(body.fluid)) : -1.0;
     }
   }
   return c;
@@ -252,7 +289,7 @@ scene::PointCloud solid_cloud(const scene::Scene& s, const std::vector<SeedPoint
 /// solid points of saturated bodies. mass = n rho_w V (saturated) or rho_w V (free water, n = 1).
 scene::PointCloud fluid_cloud(const scene::Scene& s, const std::vector<SeedPoint>& points,
                               const std::vector<BodyContent>& content, const InitialFields& init) {
-  const auto sel = select(points, [&](std::size_t b) { return content[b].has_fluid(); });
+  const auto sel = select(points, content, [](const BodyContent& c) { return c.has_fluid(); });
   scene::PointCloud c = particle_cloud(
       s, points, sel, content, [](const BodyContent& bc) { return bc.fluid_density; },
       [&](const scene::Body& b) { return static_cast<double>(s.material_index(b.fluid)); });
@@ -310,6 +347,7 @@ Phases seed_phases(const scene::Scene& s) {
   const std::vector<std::unique_ptr<Shape>> shapes = make_shapes(s);
   scene::check_memory(s, s.source_file, body_counts(s, shapes), limit);
   const std::vector<SeedPoint> points = seed_points(s, shapes);
+  reject_tables_below_bodies(s, points);
   const InitialFields init = initial_state(s, points, content);
 
   Phases out;

@@ -22,10 +22,16 @@ struct SeedPoint {
   int body;             // index into scene.bodies
   double spacing;       // m, lattice spacing h / particles_per_cell: the particle's width per axis
   std::uint32_t faces;  // bit f: the lattice neighbour across face f is outside the body or the grid
+  // The point's body has a fluid and a hydrostatic pore pressure, and the point's centre lies at or
+  // above the body's water table (x[1] >= y_wt): it is dry skeleton, without pore water (no
+  // suction), while the body's points below the table are saturated (docs/scene-format.md, "Pore
+  // pressure"). Set by seed_points.
+  bool above_water_table;
 };
 
 /// The lattice points of every body (solid, saturated and free water), in body order, with
-/// overlaps resolved (a point inside a later body's geometry belongs to that body).
+/// overlaps resolved (a point inside a later body's geometry belongs to that body), and the points
+/// of a hydrostatic body at or above its water table marked (SeedPoint::above_water_table).
 std::vector<SeedPoint> seed_points(const scene::Scene& s);
 /// The same with the bodies' shapes already built (make_shapes).
 std::vector<SeedPoint> seed_points(const scene::Scene& s, const std::vector<std::unique_ptr<Shape>>& shapes);

@@ -401,7 +401,7 @@ const Table& initial_table() {
            .type_text = "number or string", .expect = "a number or \"hydrostatic\"",
            .allowed = "any, or `\"hydrostatic\"`", .check = check_pore_pressure},
           {.name = "water_table", .range = any_number, .unit = "m",
-           .meaning = "Height of the free water surface for `\"hydrostatic\"` (default: top of the body)."},
+           .meaning = "Height of the free water surface for `\"hydrostatic\"` (default: top of the body); the soil above it is dry."},
           {.name = "stress", .type = Type::custom, .unit = "Pa",
            .meaning = "Initial effective stress: `\"geostatic\"`, or constant Voigt [xx, yy, zz, xy, yz, xz], tension positive.",
            .type_text = "string or 6 numbers", .expect = "\"geostatic\" or an array of 6 numbers (xx, yy, zz, xy, yz, xz)",

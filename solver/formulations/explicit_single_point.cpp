@@ -439,14 +439,16 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   /// (transfer/projection.hpp, without its leverage limit: a node whose H_I is singular, too few
   /// particles for the basis, falls back to the constant basis). For Order 0 the positions are
   /// immaterial; for higher orders the current positions serve as the quadrature points.
+  /// Dry points (fluid_material -1) take no part: weight 0 in the fit, and their p stays 0.
   template <class Projection>
   long mfvp(Projection& projection, ParticleSet<Dim>& ps, double dt) {
-    projection.fit(grid_, box_, schedule_, sd_, ps.x, [&](int p) { return ps.V[p]; },
+    projection.fit(grid_, box_, schedule_, sd_, ps.x, [&](int p) { return ps.fluid_material[p] < 0 ? 0.0 : ps.V[p]; },
                    [&](int p) { return pressure_rate(ps, p); });
     const long n = static_cast<long>(ps.size());
     long bad = transfer::no_particle;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
+      if (ps.fluid_material[p] < 0) continue;
       ps.p[p] += dt * projection.at_point(grid_, sd_[p], ps.x[p]);
       if (!std::isfinite(ps.p[p])) bad = std::min(bad, p);
     }

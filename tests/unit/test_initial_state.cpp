@@ -217,23 +217,30 @@ TEST(InitialState, HydrostaticPorePressureFromTheTopOrTheWaterTable) {
 }
 
 TEST(InitialState, EffectiveStressIsTheBuoyantWeightBelowTheTable) {
-  const double k0 = 0.5, rho_sat = (1 - n0) * rho_s + n0 * rho_w;
+  const double k0 = 0.5, rho_sat = (1 - n0) * rho_s + n0 * rho_w, rho_dry = (1 - n0) * rho_s;
   for (const double table : {-1.0, 1.23}) {  // a table inside the body cuts a lattice segment
     json initial = {{"stress", "geostatic"}, {"k0", k0}, {"pore_pressure", "hydrostatic"}};
     if (table > 0) initial["water_table"] = table;
     const PointCloud c = swmpm::pre::seed_phases(parse(saturated_box("explicit-single-point", initial))).solid;
     const double y_wt = table > 0 ? table : 2.0;
+    // The points whose centre lies below the table are saturated, those above it dry: the
+    // saturated segments reach y_s, the top of the segment (0.05 m) the table cuts (its centre
+    // 1.225 m lies below 1.23 m).
+    const double y_s = table > 0 ? 1.25 : 2.0;
     const auto& st = values(c, "stress");
     const auto& pp = values(c, "pore_pressure");
+    const auto& mf = values(c, "fluid_mass");
     double worst = 0.0, worst_total = 0.0;
     for (std::size_t p = 0; p < c.size(); ++p) {
       const double y = c.points[p][1];
-      // Total unit weight above the table, buoyant (1 - n)(rho_s - rho_w) below it.
-      const double above = std::min(2.0 - y, 2.0 - y_wt), below = std::max(0.0, y_wt - y);
-      const double expected = -g * (rho_sat * above + (1 - n0) * (rho_s - rho_w) * below);
+      EXPECT_EQ(mf[p] > 0.0, y < y_wt) << "saturated below the table, dry above it, at y = " << y;
+      // The dry unit weight above y_s, the saturated one from there down to the table, the buoyant
+      // (1 - n)(rho_s - rho_w) below the table; the total stress sigma' - p is the weight above.
+      const double weight = g * (rho_dry * (2.0 - std::max(y, y_s)) + rho_sat * std::max(0.0, y_s - y));
+      const double expected = -weight + rho_w * g * std::max(0.0, y_wt - y);
       const double scale = rho_sat * g * 2.0;
       worst = std::max(worst, std::abs(st[6 * p + 1] - expected) / scale);
-      worst_total = std::max(worst_total, std::abs(st[6 * p + 1] - pp[p] + rho_sat * g * (2.0 - y)) / scale);
+      worst_total = std::max(worst_total, std::abs(st[6 * p + 1] - pp[p] + weight) / scale);
       EXPECT_NEAR(st[6 * p + 0], k0 * st[6 * p + 1], 1e-9 * scale);
     }
     std::printf("effective stress, water table %.2f m: max error %.2e, total stress sigma' - p vs -rho_sat g d "

@@ -102,6 +102,7 @@ class Core : public Formulation<Dim> {
       pore_[k].perm.law = porous::law_of(m.permeability_law);
     }
     const ParticleSet<Dim>& ps = state.solid;
+    pore_water_on_soil_ = &wet == &state.solid;
     for (std::size_t p = 0; p < ps.size(); ++p) {
       const int fm = fluid_material_of(s, ps, static_cast<int>(p));
       if (fm < 0) continue;
@@ -314,8 +315,9 @@ class Core : public Formulation<Dim> {
   }
 
   /// (8) L_s = sum v_s (x) grad S with the remapped velocities; F, V and the porosity from
-  /// (1 - n) J = 1 - n0 (step 8f, porous::update_skeleton); the pore-water mass n rho_w V; then
-  /// F-bar (9)(b)-(g) and the stress by each material model. Failures reported.
+  /// (1 - n) J = 1 - n0 (step 8f, porous::update_skeleton); the pore-water mass n rho_w V (0 at a
+  /// dry single-point point: it stays dry); then F-bar (9)(b)-(g) and the stress by each material
+  /// model. Failures reported.
   void update_soil(State<Dim>& st, double dt) {
     ParticleSet<Dim>& ps = st.solid;
     const long n = static_cast<long>(ps.size());
@@ -328,7 +330,7 @@ class Core : public Formulation<Dim> {
       });
       ps.L[p] = L;
       const double J = porous::update_skeleton<Dim>(L, dt, ps.F[p], ps.V[p], ps.V0[p], ps.n[p]);
-      ps.m_f[p] = ps.n[p] * pore_[ps.material[p]].rho_w * ps.V[p];
+      ps.m_f[p] = dry(ps, p) ? 0.0 : ps.n[p] * pore_[ps.material[p]].rho_w * ps.V[p];
       if (!(J > 0.0) || !(ps.n[p] > 0.0 && ps.n[p] < 1.0)) bad = std::min(bad, p);
     }
     if (bad != transfer::no_particle) st.health.report(bad, "solid", "volume ratio J <= 0 or porosity outside (0, 1)");
@@ -346,15 +348,15 @@ class Core : public Formulation<Dim> {
   double critical_time_step(const State<Dim>& st, std::string& reason) const override {
     // Soil CFL only: the pressure is implicit (incompressible constituents) and the drag
     // semi-implicit, so neither the water's compressibility nor k limits dt. The skeleton's P-wave
-    // carries the pore water with it (saturated density).
+    // carries the pore water with it (saturated density; a dry point's own, which is faster).
     const ParticleSet<Dim>& ps = st.solid;
     double c_max = 0.0;
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       if (material_particles_[k].empty() || !materials_[k]) continue;
       const double M = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
       for (int p : material_particles_[k]) {
-        const double rho_sat = (ps.m[p] + ps.n[p] * pore_[k].rho_w * ps.V[p]) / ps.V[p];
-        c_max = std::max(c_max, std::sqrt(M / rho_sat));
+        const double rho = (ps.m[p] + (dry(ps, p) ? 0.0 : ps.n[p] * pore_[k].rho_w * ps.V[p])) / ps.V[p];
+        c_max = std::max(c_max, std::sqrt(M / rho));
       }
     }
     double v_max = 0.0;
@@ -456,6 +458,10 @@ class Core : public Formulation<Dim> {
   }
   /// rho_s = m / ((1 - n) V) of a soil point (kg/m^3).
   static double grain_density(const ParticleSet<Dim>& ps, int p) { return ps.m[p] / ((1.0 - ps.n[p]) * ps.V[p]); }
+  /// Single-point: the soil point carries no pore water (fluid_material -1: a dry body in a
+  /// saturated scene, or soil above a hydrostatic body's water table). Double-point soil points
+  /// never carry water (theirs is on the water points).
+  bool dry(const ParticleSet<Dim>& ps, long p) const { return pore_water_on_soil_ && ps.fluid_material[p] < 0; }
   /// Cell moments: when every soil point has the same grain density m / ((1 - n) V) (to 1e-12)
   /// and all the water the same density (water_density(p) of the water's points ws), the L weight
   /// of every point is (1 - n) V / rho_s + n V / rho_w, a fixed combination of the D^s and D^w
@@ -493,6 +499,7 @@ class Core : public Formulation<Dim> {
   bool conservative_ = true;           // solver.continuity = conservative (solve_pressure)
   bool implicit_drag_ = true;          // solver.drag_integration (predictor)
   bool fast_drainage_ = false;         // an initialisation with its own permeability is running
+  bool pore_water_on_soil_ = false;    // single-point: the soil points carry the water (fluid_material per point)
   NodeBox<Dim> box_;
   NodeFields<Dim> soil_, water_;
   std::vector<NodeExtra> node_;
@@ -505,8 +512,11 @@ class Core : public Formulation<Dim> {
   FBar<Dim, S> fbar_;
 
  private:
-  static int fluid_material_of(const scene::Scene& s, const ParticleSet<Dim>& ps, int p) {
-    if (!ps.fluid_material.empty() && ps.fluid_material[p] >= 0) return ps.fluid_material[p];
+  /// The pore water of soil point p: single-point, the point's own fluid_material (-1: dry, also
+  /// in a body with a fluid, above its water table); double-point (fluid_material -1 throughout),
+  /// the fluid of the point's body.
+  int fluid_material_of(const scene::Scene& s, const ParticleSet<Dim>& ps, int p) const {
+    if (pore_water_on_soil_) return ps.fluid_material[p];
     const auto& body = s.bodies[ps.body[p]];
     return body.fluid.empty() ? -1 : static_cast<int>(s.material_index(body.fluid));
   }

@@ -273,7 +273,7 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
   /// (5a)-(5b) the nodal p^t from the water points' pressures, the nodes' roles, then D^s from
   /// the soil points, D^w from the water points and L from both.
   void assemble_pressure(const ParticleSet<Dim>& ps, const ParticleSet<Dim>& ws) {
-    pressure_.fit(wschedule_, sdw_, ws);
+    pressure_.fit(wschedule_, sdw_, ws, [&](int p) { return ws.V[p]; });
     pressure_.set_node_roles(water_);
     if constexpr (kCellMoments) {
       pressure_.assemble_from_moments();

@@ -85,15 +85,15 @@ class PressureStep {
   bool drained(int f) const { return face_drained_[f]; }
   double face_pressure(int f) const { return face_pressure_[f]; }
 
-  /// (5b) p^t at the nodes: the linear projection of the water's points' pressures (volume
-  /// weights). A node whose water lies in a strip of its support (free surface) has an ill-posed
+  /// (5b) p^t at the nodes: the linear projection of the water's points' pressures, weight(p)
+  /// the point's volume (0 for a point without water: a dry single-point point). A node whose water lies in a strip of its support (free surface) has an ill-posed
   /// linear fit (leverage > NodeProjection::kMaxLeverage): it takes the gradient of the nearest
   /// well-posed node inward along its cut and fits only its value (docs/formulations.md,
   /// "Free-surface nodes whose fit is ill-posed"). Reads well-posed nodes only, writes its own:
   /// independent of the node order.
-  template <class SD>
-  void fit(const StripeSchedule& schedule, const std::vector<SD>& sd, const ParticleSet<Dim>& ws) {
-    linear_.fit(grid_, box_, schedule, sd, ws.x, [&](int p) { return ws.V[p]; }, [&](int p) { return ws.p[p]; });
+  template <class SD, class Weight>
+  void fit(const StripeSchedule& schedule, const std::vector<SD>& sd, const ParticleSet<Dim>& ws, Weight&& weight) {
+    linear_.fit(grid_, box_, schedule, sd, ws.x, weight, [&](int p) { return ws.p[p]; });
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto& ijk) {
       if (!linear_.has(i) || linear_.well_posed(i)) return;
       const std::size_t src = inward_well_posed(i, ijk);
@@ -257,8 +257,8 @@ class PressureStep {
   }
 
   /// (6)-(7c) p^{t+1} at the points that carry the water: p = (remapped p^t) + sum S dp (Remap).
-  /// mass(p): the water mass of point p (the node-remap's weights). Returns the first point whose
-  /// pressure is not finite, or -1.
+  /// mass(p): the water mass of point p (the node-remap's weights); a point without water (a dry
+  /// single-point point) keeps p = 0. Returns the first point whose pressure is not finite, or -1.
   template <class SD, class Mass>
   long update_points(const StripeSchedule& schedule, const std::vector<SD>& sd, ParticleSet<Dim>& ws, Mass&& mass) {
     if (remap_ == Remap::node)
@@ -271,6 +271,10 @@ class PressureStep {
       long bad = transfer::no_particle;
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
       for (long p = 0; p < n; ++p) {
+        if (!(mass(static_cast<int>(p)) > 0.0)) {
+          ws.p[p] = 0.0;
+          continue;
+        }
         double inc = 0.0, value = 0.0;
         visit(sd[p], ws.x[p], [&](std::size_t i, double N, double pbar) {
           inc += N * dp[i];

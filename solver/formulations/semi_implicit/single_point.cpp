@@ -65,7 +65,7 @@ class SemiImplicitSinglePoint final : public semi_implicit::Core<Dim, Shape> {
     lap("pressure solve");
 
     this->correct(dt);                                                                      // (6)
-    const long bad = pressure_.update_points(schedule_, sd_, ps, [&](int p) { return ps.m_f[p]; });
+    const long bad = pressure_.update_points(schedule_, sd_, ps, [&](int p) { return ps.m_f[p]; });  // dry: p = 0
     if (bad >= 0) st.health.report(bad, "solid", "pore pressure not finite");
     lap("correction");
 
@@ -104,7 +104,7 @@ class SemiImplicitSinglePoint final : public semi_implicit::Core<Dim, Shape> {
   /// (5a)-(5b) the nodal p^t from the points' pressures, the nodes' roles, then D^s and D^w and L
   /// from the same points (by cell moments, or point by point).
   void assemble_pressure(const ParticleSet<Dim>& ps) {
-    pressure_.fit(schedule_, sd_, ps);
+    pressure_.fit(schedule_, sd_, ps, [&](int p) { return this->dry(ps, p) ? 0.0 : ps.V[p]; });  // the water's points
     pressure_.set_node_roles(water_);
     if constexpr (kCellMoments) {
       pressure_.assemble_from_moments();
@@ -113,12 +113,16 @@ class SemiImplicitSinglePoint final : public semi_implicit::Core<Dim, Shape> {
     }
   }
   /// A point carries both phases: s = (1 - n) V, w = n V, l = V [(1 - n)/rho_s + n/rho_w]
-  /// (without_l: l is derived from the others, CellMoments::derive_laplace, and left 0).
+  /// (without_l: l is derived from the others, CellMoments::derive_laplace, and left 0). A dry
+  /// point carries the soil's shares only, w = 0 and l = V (1 - n)/rho_s, as a double-point soil
+  /// point: its empty pores hold no water for the pressure to move.
   Weights weights(const ParticleSet<Dim>& ps, int p, bool without_l = false) const {
     const double V = ps.V[p], n = ps.n[p];
-    if (without_l) return {(1.0 - n) * V, n * V, 0.0};
-    const double c = (1.0 - n) / Core::grain_density(ps, p) + n / pore_[ps.material[p]].rho_w;
-    return {(1.0 - n) * V, n * V, V * c};
+    const bool dry = this->dry(ps, p);
+    const double w = dry ? 0.0 : n * V;
+    if (without_l) return {(1.0 - n) * V, w, 0.0};
+    const double c = (1.0 - n) / Core::grain_density(ps, p) + (dry ? 0.0 : n / pore_[ps.material[p]].rho_w);
+    return {(1.0 - n) * V, w, V * c};
   }
 };
 
