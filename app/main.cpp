@@ -3,6 +3,7 @@
 #include <malloc.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <limits>
@@ -180,7 +181,9 @@ int postprocess_command(const std::string& run_dir, const PostArgs& a, bool quie
         for (const auto& f : files) std::cout << "plot: " << f << "\n";
     } else if (cmd == "report") {
       const std::string path = post::write_report(run_dir, refs);
-      if (!quiet) std::cout << "report: " << path << "\n";
+      if (!quiet)  // report.html beside it: the same page, pictures embedded
+        std::cout << "report: " << path << " and " << (std::filesystem::path(path).parent_path() / "report.html").string()
+                  << "\n";
     }
   } catch (const swmpm::scene::InputError& e) {  // a file refused: not regular, too large, bad JSON
     std::cerr << "swmpm postprocess " << cmd << ": " << e.what() << "\n";

@@ -354,7 +354,9 @@ TEST(RunCommand, LeavesFramesMonitorsPlotsAndAReport) {
   for (const char* png : {"top.png", "base.png", "energy.png"}) EXPECT_TRUE(fs::exists(run / "plots" / png)) << png;
   const std::string report = swmpm::testing::read_text((run / "report.md").string());
   EXPECT_NE(report.find("# Run report: elastic-column"), std::string::npos) << report.substr(0, 200);
-  EXPECT_NE(r.out.find("report: " + (run / "report.md").string()), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("report: " + (run / "report.md").string() + " and " + (run / "report.html").string()),
+            std::string::npos)
+      << r.out;
 }
 
 // A run of free water only (explicit-double-point, no soil body) has empty solid frames: its
