@@ -109,32 +109,32 @@ void setup_section(Page& page, const json& scene, const json& run) {
 }
 
 /// Which formulation ran and why: named in the scene, or chosen by "auto" with both estimates.
+/// A duration in seconds at `key` ("47 s", "3.2 min"), or "—".
+std::string duration_at(const json& j, const std::string& key) {
+  return j.contains(key) && j[key].is_number() ? scene::format_duration(j[key].get<double>()) : "—";
+}
+
 void formulation_section(Page& page, const json& run) {
   page.add_heading("Formulation");
   const json choice = run.value("formulation_choice", json());
   const std::string ran = get(run, "formulation");
   if (!choice.is_object() || !choice.value("automatic", false)) {
-    page.add_paragraph("`" + ran + "`, as the scene file names it." +
-                   (run.contains("formulation_reason") && !get(run, "formulation_reason").empty() &&
-                            get(run, "formulation_reason") != "—"
-                        ? " " + get(run, "formulation_reason")
-                        : ""));
+    const std::string reason = run.value("formulation_reason", std::string());
+    page.add_paragraph("`" + ran + "`, as the scene file names it." + (reason.empty() ? "" : " " + reason));
     return;
   }
   page.add_paragraph("`" + ran + "`, chosen by `\"formulation\": \"auto\"` before the first step: " +
-                 choice.value("reason", std::string("(no reason recorded)")));
+                     choice.value("reason", std::string("(no reason recorded)")));
   const json estimates = choice.value("estimates", json::array());
   if (!estimates.is_array() || estimates.empty()) return;
   Rows rows;
   for (const auto& e : estimates)
     rows.push_back({get(e, "formulation"), get(e, "dt"), get(e, "steps"), get(e, "us_per_point_step"),
-                    e.contains("wall_seconds") && e["wall_seconds"].is_number() ? scene::format_duration(e["wall_seconds"].get<double>()) : "—",
-                    get(e, "dt_reason")});
+                    duration_at(e, "wall_seconds"), get(e, "dt_reason")});
   page.add_paragraph("The estimates it compared (one thread; µs per point-step as measured on the bench machine):");
   page.add_table({"formulation", "dt [s]", "steps", "µs per point-step", "estimated wall time", "step limited by"}, rows);
-  if (run.contains("wall_seconds") && run["wall_seconds"].is_number())
-    page.add_paragraph("This run took " + scene::format_duration(run["wall_seconds"].get<double>()) + " on " + get(run, "threads") +
-                   " thread(s).");
+  if (run.contains("wall_seconds"))
+    page.add_paragraph("This run took " + duration_at(run, "wall_seconds") + " on " + get(run, "threads") + " thread(s).");
 }
 
 void cost_section(Page& page, const json& run) {
@@ -220,11 +220,12 @@ void stability_section(Page& page, const json& run) {
     rows.push_back({name, bound, num(w.value("value", 0.0), 4), get(w, "time"), where,
                     n > 0 ? "CROSSED in " + std::to_string(n) + " of " + std::to_string(frames) + " frames" : "within"});
   }
+  const std::string definitions = "docs/verification.md, \"Stability indicators of every run\"";
   page.add_paragraph(crossed == 0 ? "Every indicator stayed within its threshold over the " + std::to_string(frames) +
-                                    " frames (definitions: docs/verification.md, \"Stability indicators of every run\")."
-                              : std::to_string(crossed) + " indicator(s) crossed their threshold: read the results with "
-                                                          "care (definitions and what a crossing means: "
-                                                          "docs/verification.md, \"Stability indicators of every run\").");
+                                        " frames (definitions: " + definitions + ")."
+                                  : std::to_string(crossed) +
+                                        " indicator(s) crossed their threshold: read the results with care (definitions "
+                                        "and what a crossing means: " + definitions + ").");
   page.add_table({"indicator", "threshold", "worst", "at t [s]", "where", "verdict"}, rows);
 }
 
@@ -232,7 +233,7 @@ void comparison_section(Page& page, const std::string& run_dir, const std::vecto
   if (refs.empty()) return;
   page.add_heading("Comparison with references");
   page.add_paragraph("The monitor is interpolated linearly onto the reference times inside the run's time span. "
-                 "Relative L2 = ‖run − reference‖₂ / ‖reference‖₂.");
+                     "Relative L2 = ‖run − reference‖₂ / ‖reference‖₂.");
   Rows rows;
   for (const auto& r : refs) {
     const Comparison c = compare(run_dir, r.column, r.path);
@@ -241,8 +242,8 @@ void comparison_section(Page& page, const std::string& run_dir, const std::vecto
                     num(c.peak_run) + " (" + num(c.peak_run_time) + ")", num(c.peak_ref) + " (" + num(c.peak_ref_time) + ")"});
   }
   page.add_table({"monitor", "reference", "points", "span [s]", "relative L2", "max abs error (at t)", "peak run (at t)",
-              "peak reference (at t)"},
-             rows);
+                  "peak reference (at t)"},
+                 rows);
 }
 
 /// plots/field_*.png, by quantity, then by time as a number (0.5 before 10).
