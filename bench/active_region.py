@@ -24,8 +24,11 @@ Scenes (2D, gravity):
   and a fixed, impermeable base; its own grid leaves two empty cells right of and above it (the
   right side and the top are free). The box scenes of bench/dry_box.py, reshaped.
   mpm-fem: a saturated column 0.1 m wide and 0.2 m high (h = 0.01 m, quadratic B-splines, 2 x 2
-  points per cell: 800 points) in air; its fluid lives on the whole grid (water in the column's
-  pores, air around it), so the empty space is air the fluid solver works on.
+  points per cell: 800 points) in air. Its fluid (water in the column's pores, air around it) is
+  solved on the active region (solver.air.domain "active", the default): the cells of the water
+  (phi > 0.01: the initial phase field's tail reaches 2 cells beyond the column) and the soil,
+  widened by 3 cells. Its own grid leaves FEM_MARGIN = 5 cells right of and above the column, so
+  that it is the region a larger grid solves on.
 
 Usage: bench/active_region.py [--swmpm build/app/swmpm] [--formulations dry,...] [--areas 1,4,16]
                               [--steps 200] [--fem-steps 20] [--repeat 3] [--out FILE.md]
@@ -44,6 +47,7 @@ ALL = MPM_FORMULATIONS + ["mpm-fem"]
 H = 1.0 / 32.0               # m, cell size of the MPM columns
 WIDTH, HEIGHT = 1.25, 4.0    # m, the MPM column
 MARGIN = 2                   # empty cells right of and above the scene on its own grid
+FEM_MARGIN = 5               # the same for mpm-fem: the phase field's tail (2) and the fluid region's halo (3)
 
 
 def mpm_scene(formulation, steps):
@@ -63,7 +67,7 @@ def fem_scene(steps):
     h, w, ht, dt = 0.01, 0.1, 0.2, 1e-4
     return {
         "name": "active-mpm-fem", "dimension": 2, "formulation": "mpm-fem", "gravity": [0.0, -9.81],
-        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [w + MARGIN * h, ht + MARGIN * h],
+        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [w + FEM_MARGIN * h, ht + FEM_MARGIN * h],
                  "shape_function": "bspline2"},
         "materials": [{"name": "beads", "model": "linear-elastic", "grain_density": 2650.0, "porosity": 0.4,
                        "youngs_modulus": 1e6, "poisson_ratio": 0.3, "grain_diameter": 0.001},

@@ -617,6 +617,12 @@ const Table& air_table() {
                       "φ ρ_w + (1 − φ) ρ_g (seed 004)."},
           {.name = "dynamic_viscosity", .def = 1.8e-5, .range = positive, .unit = "Pa s",
            .meaning = "Dynamic viscosity μ_g of the air; the fluid's is φ μ_w + (1 − φ) μ_g (seed 004)."},
+          {.name = "domain", .type = Type::choice, .def = "active", .values = {"active", "grid"},
+           .meaning = "Where the fluid (water and air) is solved. `active`: on the box of cells that hold water "
+                      "(φ > 0.01 at a node) or soil, widened by p + 1 cells (p the B-splines' degree) and "
+                      "grown when they come within p cells of its edge; where the box ends inside the grid its "
+                      "faces are open (p = 0, as a grid face not listed in `boundaries`), and the air beyond is "
+                      "at rest. `grid`: the whole grid, as seed 004 (docs/formulations.md, \"Active region\")."},
       }};
   return t;
 }

@@ -677,6 +677,7 @@ void SceneParser::parse_solver(const json& j, const std::string& path) {
   const Obj air = check_object(c_, o.ok("air") ? o.get("air") : json::object(), o.at("air"), {&air_table()});
   sv.air.density = air.num("density", sv.air.density);
   sv.air.dynamic_viscosity = air.num("dynamic_viscosity", sv.air.dynamic_viscosity);
+  sv.air.whole_grid = air.str("domain", "active") == "grid";
   const Obj pf = check_object(c_, o.ok("phase_field") ? o.get("phase_field") : json::object(), o.at("phase_field"),
                               {&phase_field_table()});
   if (pf.ok("interface_width")) sv.phase_field.interface_width = pf.num("interface_width");

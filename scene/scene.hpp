@@ -180,6 +180,7 @@ double default_fbar_patch(ShapeFunction f);
 struct Air {
   double density = 1.2;              // kg/m^3
   double dynamic_viscosity = 1.8e-5;  // Pa s
+  bool whole_grid = false;            // domain "grid": the fluid on every cell (else near water and soil)
 };
 
 /// mpm-fem (seed 004): the Allen–Cahn phase field phi (1 water, 0 air) that carries the water's

@@ -206,7 +206,9 @@ nlohmann::json to_json(const Scene& s) {
   if (row.find("/solver/drag")) j["solver"]["drag"] = sv.drag;
   if (row.reads("/solver/soil_substeps")) j["solver"]["soil_substeps"] = sv.soil_substeps;
   if (row.reads("/solver/air"))
-    j["solver"]["air"] = {{"density", sv.air.density}, {"dynamic_viscosity", sv.air.dynamic_viscosity}};
+    j["solver"]["air"] = {{"density", sv.air.density},
+                          {"dynamic_viscosity", sv.air.dynamic_viscosity},
+                          {"domain", sv.air.whole_grid ? "grid" : "active"}};
   if (row.reads("/solver/phase_field")) {  // an absent value stays absent: the solver's choice
     json pf = json::object();
     if (sv.phase_field.interface_width) pf["interface_width"] = *sv.phase_field.interface_width;

@@ -172,4 +172,34 @@ void for_each_cell_coloured(const std::array<int, Dim>& cells, Fn&& fn) {
   }
 }
 
+/// for_each_cell_coloured over the cells lo ... hi only (inclusive, per axis), with the colours of
+/// the whole grid's loop (a cell's colour is its index mod S), so that a node's sums come in the
+/// same order as there.
+template <int Dim, int S, class Fn>
+void for_each_cell_coloured(const std::array<int, Dim>& lo, const std::array<int, Dim>& hi, Fn&& fn) {
+  constexpr int colours = ipow(S, Dim);
+  for (int colour = 0; colour < colours; ++colour) {
+    std::array<int, Dim> first{}, count{};
+    long total = 1;
+    int r = colour;
+    for (int a = 0; a < Dim; ++a) {
+      const int k = r % S;
+      r /= S;
+      first[a] = lo[a] + ((k - lo[a]) % S + S) % S;
+      count[a] = first[a] <= hi[a] ? (hi[a] - first[a]) / S + 1 : 0;
+      total *= count[a];
+    }
+#pragma omp parallel for schedule(static) if (total > 256)
+    for (long t = 0; t < total; ++t) {
+      std::array<int, Dim> c;
+      long q = t;
+      for (int a = 0; a < Dim; ++a) {
+        c[a] = first[a] + static_cast<int>(q % count[a]) * S;
+        q /= count[a];
+      }
+      fn(c);
+    }
+  }
+}
+
 }  // namespace swmpm::fem

@@ -107,7 +107,8 @@ class MpmFem final : public Formulation<Dim> {
       if (m.has("ergun_a")) props.kozeny = m.at("ergun_a");
       if (m.has("ergun_b")) props.forchheimer = m.at("ergun_b");
     }
-    fluid_.setup(grid_, props, fluid_conditions(s));
+    props_ = props;
+    face_conditions(s);
     const auto& pspg = s.solver.stabilisation.pressure;
     fluid_.pspg = pspg == "pspg-increment" ? fem::Fluid<Dim, Shape>::Pspg::increment : fem::Fluid<Dim, Shape>::Pspg::residual;
     fluid_.implicit_drag = s.solver.drag_integration != "explicit";
@@ -115,15 +116,21 @@ class MpmFem final : public Formulation<Dim> {
     double g2 = 0.0;
     for (double ga : s.gravity) g2 += ga * ga;
     fluid_.pspg_time_floor = g2 > 0.0 ? std::sqrt(grid_.h() / std::sqrt(g2)) / 40.0 : 0.0;
+    // The fluid's nodal state on the whole grid (the solve works on the active region's copy).
+    const std::size_t nodes = grid_.num_nodes();
+    v_.assign(nodes, Vec<Dim>::Zero());
+    v_old_.assign(nodes, Vec<Dim>::Zero());
+    p_.assign(nodes, 0.0);
+    phi_.assign(nodes, 1.0);
     // The phase field: preprocess's nodal phi (particles/phase_field.vtu).
-    if (state.phase_field.points.size() == grid_.num_nodes()) {
+    if (state.phase_field.points.size() == nodes) {
       const auto* phi = state.phase_field.find("phi");
       if (!phi) throw std::runtime_error("particles/phase_field.vtu has no array \"phi\"");
-      for (std::size_t i = 0; i < grid_.num_nodes(); ++i) fluid_.phi[i] = phi->values[i];
+      for (std::size_t i = 0; i < nodes; ++i) phi_[i] = phi->values[i];
       // The water's initial velocity (bodies' initial.velocity; older runs have none: at rest).
       if (const auto* v = state.phase_field.find("velocity"))
-        for (std::size_t i = 0; i < grid_.num_nodes(); ++i)
-          for (int a = 0; a < Dim; ++a) fluid_.v[i][a] = fluid_.v_old[i][a] = v->values[3 * i + a];
+        for (std::size_t i = 0; i < nodes; ++i)
+          for (int a = 0; a < Dim; ++a) v_[i][a] = v_old_[i][a] = v->values[3 * i + a];
     } else if (!state.phase_field.points.empty()) {
       throw std::runtime_error("particles/phase_field.vtu holds " + std::to_string(state.phase_field.points.size()) +
                                " nodes, the grid " + std::to_string(grid_.num_nodes()) + ": run swmpm preprocess again");
@@ -133,10 +140,9 @@ class MpmFem final : public Formulation<Dim> {
     pf.mobility = s.solver.phase_field.mobility.value_or(kDefaultMobility);
     pf.volume_correction = s.solver.phase_field.volume_correction;
     pf.lsic = s.solver.phase_field.lsic;
-    phase_.setup(grid_, fluid_.basis(), pf);
+    phase_prm_ = pf;
     phase_mobility_ = pf.mobility;
     substeps_ = std::max(1, s.solver.soil_substeps);
-    const std::size_t nodes = grid_.num_nodes();
     solid_.resize(nodes);
     sums_.assign(nodes, SoilSums{});
     soil_.resize(nodes);
@@ -144,7 +150,12 @@ class MpmFem final : public Formulation<Dim> {
     drag_.assign(nodes, 0.0);
     support_.resize(nodes);
     for (std::size_t i = 0; i < nodes; ++i) support_[i] = porous::basis_integral<Shape>(grid_, i);
-    initial_hydrostatic_pressure(s);
+    basis_.build(grid_);
+    soil_box_ = NodeBox<Dim>{};
+    for (int a = 0; a < Dim; ++a) soil_box_.hi[a] = -1;  // empty
+    whole_grid_ = s.solver.air.whole_grid;
+    set_region(whole_grid_ ? all_cells() : wanted_region(points_node_box(state.solid), empty_box(), 1));
+    if (initial_hydrostatic_pressure(s)) set_region(region_, /*count=*/false);  // p copied onto the region
   }
 
   std::string name() const override { return "mpm-fem"; }
@@ -159,7 +170,6 @@ class MpmFem final : public Formulation<Dim> {
     if (ps.size() > 0 && reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval))
       lap("reorder");                                                                          // (0)
     soil_to_grid(st, ctx, b);                                                                  // (i)-(ii)
-    if (water_volume0_ < 0.0) water_target_ = water_volume0_ = phase_.volume(fluid_.phi, soil_.n);  // int n phi at t = 0
     lap("soil p2g");
 
     // Multi-rate (solver.soil_substeps = k): the fluid and the phase field advance at the first of
@@ -167,10 +177,16 @@ class MpmFem final : public Formulation<Dim> {
     // pressure and velocity meanwhile (the seed's staggering, steps iii-v, with a longer fluid
     // step). k = 1 is the seed's scheme: the fluid's step is the soil's.
     if (substep_ == 0) {
+      // The active region follows the water and the soil (a new pattern when it grows), and the
+      // soil's nodal fields are copied onto its nodes.
+      if (!whole_grid_ && !region_holds_content(soil_nodes())) set_region(wanted_region(soil_nodes(), region_, 2));
+      gather_soil();
+      if (water_volume0_ < 0.0) water_target_ = water_volume0_ = phase_.volume(fluid_.phi, fsoil_.n);  // int n phi at t = 0
+      lap("fluid region");
       const double dt_f = substeps_ == 1 ? dt : soil_time_ + substeps_ * dt - fluid_time_;
       fluid_time_ = soil_time_ + (substeps_ == 1 ? dt : substeps_ * dt);
       const double a0 = fluid_.seconds_assemble, f0 = fluid_.seconds_factorise, s0 = fluid_.seconds_solve;
-      if (!fluid_.step(soil_, b, dt_f)) {                                                        // (iii)
+      if (!fluid_.step(fsoil_, b, dt_f)) {                                                        // (iii)
         st.health.report_node(0, {0, 0, 0}, "fluid", "the fluid's system could not be solved (singular)");
         return;
       }
@@ -182,10 +198,11 @@ class MpmFem final : public Formulation<Dim> {
       // The water's volume: what it was, less what flowed out through open faces this step
       // (sum over their nodes of n phi v.n_out int N dGamma).
       for (const auto& o : fluid_.conditions().open)
-        water_target_ -= dt_f * soil_.n[o.node] * std::clamp(fluid_.phi[o.node], 0.0, 1.0) * o.sign * fluid_.v[o.node][o.axis] * o.area;
-      if (phase_.step(fluid_.phi, fluid_.v, soil_.n, dt_f, water_target_) < 0)                 // (iv)
+        water_target_ -= dt_f * fsoil_.n[o.node] * std::clamp(fluid_.phi[o.node], 0.0, 1.0) * o.sign * fluid_.v[o.node][o.axis] * o.area;
+      if (phase_.step(fluid_.phi, fluid_.v, fsoil_.n, dt_f, water_target_) < 0)                 // (iv)
         st.health.report_node(0, {0, 0, 0}, "fluid", "the phase field's solve did not converge");
       water_corrected_ += phase_.last_corrected_volume;
+      scatter_fluid();
       lap("phase field");
     }
     substep_ = (substep_ + 1) % substeps_;
@@ -271,7 +288,7 @@ class MpmFem final : public Formulation<Dim> {
       face.lo[pf.axis] = face.hi[pf.axis] = pf.side == 0 ? 0 : grid_.nodes_per_axis()[pf.axis] - 1;
       const double sign = pf.side == 0 ? -1.0 : 1.0;
       grid_.for_each_node(face, [&](std::size_t i, const auto&) {
-        power -= pf.value * sign * fluid_.v[i][pf.axis] * porous::basis_integral<Shape>(grid_, i, pf.axis);
+        power -= pf.value * sign * v_[i][pf.axis] * porous::basis_integral<Shape>(grid_, i, pf.axis);
       });
     }
     loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool) { power += f_p.dot(ps.v[p]); });
@@ -292,8 +309,8 @@ class MpmFem final : public Formulation<Dim> {
       double pp = 0.0;
       Vec<Dim> vf = Vec<Dim>::Zero();
       shape::for_each_node(grid_, sd_[p], [&](std::size_t i, double N, const Vec<Dim>&) {
-        pp += N * fluid_.p[i];
-        vf += N * fluid_.v[i];
+        pp += N * p_[i];
+        vf += N * v_[i];
       });
       ps.p[p] = pp;
       if (has_vf) ps.v_f[p] = vf;
@@ -321,9 +338,9 @@ class MpmFem final : public Formulation<Dim> {
     por.resize(n);
     th.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
-      for (int a = 0; a < Dim; ++a) v[3 * i + a] = fluid_.v[i][a];
-      p[i] = fluid_.p[i];
-      phi[i] = fluid_.phi[i];
+      for (int a = 0; a < Dim; ++a) v[3 * i + a] = v_[i][a];
+      p[i] = p_[i];
+      phi[i] = phi_[i];
       por[i] = soil_.n[i];
       th[i] = soil_.theta[i];
     }
@@ -331,7 +348,7 @@ class MpmFem final : public Formulation<Dim> {
   }
 
   bool fluid_on_grid() const override { return true; }
-  std::size_t fluid_nodes() const override { return grid_.num_nodes(); }
+  std::size_t fluid_nodes() const override { return fgrid_.num_nodes(); }
   double grid_value(const std::array<double, 3>& x, GridQuantity q) const override {
     Vec<Dim> xp;
     for (int a = 0; a < Dim; ++a) xp[a] = x[a];
@@ -339,11 +356,11 @@ class MpmFem final : public Formulation<Dim> {
     double out = 0.0;
     interpolate(xp, [&](std::size_t i, double N) {
       switch (q) {
-        case GridQuantity::pressure: out += N * fluid_.p[i]; break;
-        case GridQuantity::velocity_x: out += N * fluid_.v[i][0]; break;
-        case GridQuantity::velocity_y: out += N * fluid_.v[i][1]; break;
-        case GridQuantity::velocity_z: out += Dim == 3 ? N * fluid_.v[i][Dim - 1] : 0.0; break;
-        case GridQuantity::phase: out += N * fluid_.phi[i]; break;
+        case GridQuantity::pressure: out += N * p_[i]; break;
+        case GridQuantity::velocity_x: out += N * v_[i][0]; break;
+        case GridQuantity::velocity_y: out += N * v_[i][1]; break;
+        case GridQuantity::velocity_z: out += Dim == 3 ? N * v_[i][Dim - 1] : 0.0; break;
+        case GridQuantity::phase: out += N * phi_[i]; break;
       }
     });
     return out;
@@ -365,8 +382,10 @@ class MpmFem final : public Formulation<Dim> {
   }
 
   std::vector<typename Formulation<Dim>::Counter> counters() const override {
-    const double V = phase_.volume(fluid_.phi, soil_.n);
+    const double V = phase_.volume(fluid_.phi, fsoil_.n);
     return {{"fluid steps", static_cast<double>(fluid_.solves), ""},
+            {"fluid nodes (active region)", static_cast<double>(fgrid_.num_nodes()), ""},
+            {"fluid region changes", static_cast<double>(region_changes_), ""},
             {"fluid factorisations", static_cast<double>(fluid_.factorisations()), ""},
             {"fluid Krylov iterations per step",
              fluid_.solves > 0 ? static_cast<double>(fluid_.krylov_iterations) / static_cast<double>(fluid_.solves) : 0.0, ""},
@@ -380,10 +399,14 @@ class MpmFem final : public Formulation<Dim> {
   // its next step (refactorise_), so that both continue with the same factor, bit for bit.
   void save(Checkpoint& c) const override {
     save_order(c, "formulation/schedule_order", schedule_);
-    c.put("formulation/fluid_v", fluid_.v);
-    c.put("formulation/fluid_v_old", fluid_.v_old);
-    c.put("formulation/fluid_p", fluid_.p);
-    c.put("formulation/phi", fluid_.phi);
+    c.put("formulation/fluid_v", v_);
+    c.put("formulation/fluid_v_old", v_old_);
+    c.put("formulation/fluid_p", p_);
+    c.put("formulation/phi", phi_);
+    std::vector<double> region;
+    for (int a = 0; a < Dim; ++a) region.insert(region.end(), {static_cast<double>(region_.lo[a]), static_cast<double>(region_.hi[a])});
+    region.push_back(static_cast<double>(region_changes_));
+    c.put("formulation/fluid_region", region);
     c.put("formulation/water_volume0", std::vector<double>{water_volume0_, water_target_, water_corrected_});
     c.put("formulation/multirate", std::vector<double>{static_cast<double>(substep_), soil_time_, fluid_time_});
     fluid_.refactorise();
@@ -391,10 +414,18 @@ class MpmFem final : public Formulation<Dim> {
   void restore(const Checkpoint& c, State<Dim>& st) override {
     regroup_by_material(st.solid, material_particles_);
     restore_order(c, "formulation/schedule_order", schedule_);
-    c.get("formulation/fluid_v", fluid_.v);
-    c.get("formulation/fluid_v_old", fluid_.v_old);
-    c.get("formulation/fluid_p", fluid_.p);
-    c.get("formulation/phi", fluid_.phi);
+    c.get("formulation/fluid_v", v_);
+    c.get("formulation/fluid_v_old", v_old_);
+    c.get("formulation/fluid_p", p_);
+    c.get("formulation/phi", phi_);
+    NodeBox<Dim> region = all_cells();  // checkpoints before the active region: the whole grid
+    if (c.has("formulation/fluid_region")) {
+      std::vector<double> r;
+      c.get("formulation/fluid_region", r);
+      for (int a = 0; a < Dim; ++a) region.lo[a] = static_cast<int>(r.at(2 * a)), region.hi[a] = static_cast<int>(r.at(2 * a + 1));
+      region_changes_ = static_cast<long>(r.at(2 * Dim));
+    }
+    set_region(region, /*count=*/false);
     std::vector<double> v0;
     c.get("formulation/water_volume0", v0);
     water_volume0_ = v0.empty() ? -1.0 : v0[0];
@@ -415,80 +446,250 @@ class MpmFem final : public Formulation<Dim> {
   static constexpr double kDefaultMobility = 200.0;   // 1/s, the interface's relaxation rate M W
   static constexpr double kMaxStep = 1e-3;            // s, dt auto with nothing moving
 
-  /// The fluid's Dirichlet conditions on the grid faces (boundaries[].on = x_min ... z_max):
-  /// impermeable stops the normal velocity, and with a fixed solid every component (no-slip);
-  /// drained gives p = 0, pressure p = value. Faces without a `fluid` entry are impermeable
-  /// where the solid is fixed, roller or friction, drained where it is free; faces not listed are
-  /// drained (as the other formulations, loads.hpp GridBoundary::fluid).
-  typename fem::Fluid<Dim, Shape>::Conditions fluid_conditions(const scene::Scene& s) {
-    typename fem::Fluid<Dim, Shape>::Conditions bc;
-    const std::size_t n = grid_.num_nodes();
-    bc.fixed.assign(n, 0);
-    bc.p_value.assign(n, 0.0);
-    bc.face_load.assign(n, Vec<Dim>::Zero());
-    const auto& nn = grid_.nodes_per_axis();
+  /// The fluid's conditions on the grid faces (boundaries[].on = x_min ... z_max): impermeable
+  /// stops the normal velocity, and with a fixed solid every component (no-slip); drained gives
+  /// p = 0, pressure p = value. Faces without a `fluid` entry are impermeable where the solid is
+  /// fixed, roller or friction, drained where it is free; faces not listed are drained (as the
+  /// other formulations, loads.hpp GridBoundary::fluid).
+  void face_conditions(const scene::Scene& s) {
     static const char* names[6] = {"x_min", "x_max", "y_min", "y_max", "z_min", "z_max"};
     for (int f = 0; f < 2 * Dim; ++f) {
       const int axis = f / 2, side = f % 2;
-      std::uint8_t bits = 1u << Dim;  // drained (not listed)
-      double value = 0.0;
+      FaceCondition& fc = faces_[f];
+      fc.bits = 1u << Dim;  // drained (not listed)
+      fc.value = 0.0;
       for (const auto& b : s.boundaries) {
         if (b.on != names[f]) continue;
         const bool impermeable = b.fluid ? *b.fluid == scene::FluidBc::impermeable : b.solid != scene::SolidBc::free;
         if (impermeable) {
-          bits = b.solid == scene::SolidBc::fixed ? static_cast<std::uint8_t>((1u << Dim) - 1) : static_cast<std::uint8_t>(1u << axis);
+          fc.bits = b.solid == scene::SolidBc::fixed ? static_cast<std::uint8_t>((1u << Dim) - 1) : static_cast<std::uint8_t>(1u << axis);
         } else {
-          bits = 1u << Dim;
-          if (b.fluid && *b.fluid == scene::FluidBc::pressure) value = b.fluid_value;
+          fc.bits = 1u << Dim;
+          if (b.fluid && *b.fluid == scene::FluidBc::pressure) fc.value = b.fluid_value;
         }
       }
-      NodeBox<Dim> face = grid_.all_nodes();
+      if (fc.value != 0.0) pressure_faces_.push_back({axis, side, fc.value});
+    }
+  }
+
+  /// The Dirichlet conditions of the fluid's grid (the active region): a face of the region on
+  /// a face of the grid takes the grid face's condition, a face inside the grid is open (p = 0,
+  /// drained: the air beyond is at rest at the atmosphere's pressure).
+  typename fem::Fluid<Dim, Shape>::Conditions region_conditions(const NodeBox<Dim>& region) const {
+    typename fem::Fluid<Dim, Shape>::Conditions bc;
+    const Grid<Dim>& g = fgrid_;
+    const std::size_t n = g.num_nodes();
+    bc.fixed.assign(n, 0);
+    bc.p_value.assign(n, 0.0);
+    bc.face_load.assign(n, Vec<Dim>::Zero());
+    const auto& nn = g.nodes_per_axis();
+    for (int f = 0; f < 2 * Dim; ++f) {
+      const int axis = f / 2, side = f % 2;
+      const bool on_grid_face = side == 0 ? region.lo[axis] == 0 : region.hi[axis] == grid_.axis(axis).cells - 1;
+      const std::uint8_t bits = on_grid_face ? faces_[f].bits : static_cast<std::uint8_t>(1u << Dim);
+      const double value = on_grid_face ? faces_[f].value : 0.0;
+      NodeBox<Dim> face = g.all_nodes();
       face.lo[axis] = face.hi[axis] = side == 0 ? 0 : nn[axis] - 1;
-      grid_.for_each_node(face, [&](std::size_t i, const auto&) {
+      g.for_each_node(face, [&](std::size_t i, const auto&) {
         bc.fixed[i] |= bits;
         if (bits >> Dim & 1) bc.p_value[i] = value;
       });
       if (bits >> Dim & 1)  // an open face: the backflow term (fluid.hpp) at its nodes
-        grid_.for_each_node(face, [&](std::size_t i, const auto&) {
-          bc.open.push_back({i, axis, side == 0 ? -1.0 : 1.0, porous::basis_integral<Shape>(grid_, i, axis)});
+        g.for_each_node(face, [&](std::size_t i, const auto&) {
+          bc.open.push_back({i, axis, side == 0 ? -1.0 : 1.0, porous::basis_integral<Shape>(g, i, axis)});
         });
-      if (value != 0.0) pressure_faces_.push_back({axis, side, value});
       // A prescribed p != 0 pushes on the fluid through the face: the boundary term of the
       // pressure's integration by parts, -int N_I n p n_out dGamma (eq. 20's right-hand side).
       if (value != 0.0)
-        grid_.for_each_node(face, [&](std::size_t i, const auto&) {
-          bc.face_load[i][axis] -= value * (side == 0 ? -1.0 : 1.0) * porous::basis_integral<Shape>(grid_, i, axis);
+        g.for_each_node(face, [&](std::size_t i, const auto&) {
+          bc.face_load[i][axis] -= value * (side == 0 ? -1.0 : 1.0) * porous::basis_integral<Shape>(g, i, axis);
         });
     }
     return bc;
   }
 
+  // ---- The active region (docs/formulations.md, "mpm-fem", "Active region") ----
+  // The fluid is solved on a box of cells that holds the water (a node with phi > kWetPhase) and
+  // the soil, widened by kHalo cells. The box is a grid of its own, with the clamped B-splines at
+  // its faces (fgrid_): where a face of the box is a face of the grid it takes the scene's
+  // condition, elsewhere it is open (p = 0), and the air beyond is taken at rest. kHalo = p + 1
+  // keeps the soil's nodes off the box's p boundary rows, whose clamped functions differ from the
+  // grid's: there the box's nodes are the grid's, function for function, and the soil and the
+  // fluid exchange nodal values by index. The box grows (never shrinks) when the water or the
+  // soil comes within p cells of a face inside the grid, to 2 kHalo cells beyond them.
+  static constexpr int kHalo = Shape::degree + 1;  // cells
+  static constexpr double kWetPhase = 0.01;
+
+  NodeBox<Dim> all_cells() const {
+    NodeBox<Dim> b;
+    for (int a = 0; a < Dim; ++a) b.lo[a] = 0, b.hi[a] = grid_.axis(a).cells - 1;
+    return b;
+  }
+
+  static NodeBox<Dim> empty_box() {
+    NodeBox<Dim> b;
+    for (int a = 0; a < Dim; ++a) b.lo[a] = 0, b.hi[a] = -1;
+    return b;
+  }
+  /// The nodes the soil's points reach this step (empty without soil).
+  NodeBox<Dim> soil_nodes() const { return sd_.empty() ? empty_box() : box_; }
+  /// The nodes points at these positions reach (before the first step's shape functions).
+  NodeBox<Dim> points_node_box(const ParticleSet<Dim>& ps) const {
+    if (ps.size() == 0) return empty_box();
+    NodeBox<Dim> b;
+    for (int a = 0; a < Dim; ++a) b.lo[a] = std::numeric_limits<int>::max(), b.hi[a] = -1;
+    for (std::size_t q = 0; q < ps.size(); ++q)
+      for (int a = 0; a < Dim; ++a) {
+        const int c = std::clamp(static_cast<int>(std::floor((ps.x[q][a] - grid_.min()[a]) / grid_.h())), 0, grid_.axis(a).cells - 1);
+        b.lo[a] = std::min(b.lo[a], c);
+        b.hi[a] = std::max(b.hi[a], c + Shape::degree);  // a point in cell c reaches nodes c ... c + p
+      }
+    return b;
+  }
+
+  /// The cells of the water and the soil: those in the support of a node with phi > kWetPhase
+  /// (scanned within the cells `within`, or the whole grid when it is empty), and those that
+  /// hold soil (its points reach nodes soil.lo ... soil.hi, a point in cell c nodes c ... c + p).
+  NodeBox<Dim> content(const NodeBox<Dim>& soil, const NodeBox<Dim>& within) const {
+    NodeBox<Dim> nodes;
+    for (int a = 0; a < Dim; ++a) nodes.lo[a] = std::numeric_limits<int>::max(), nodes.hi[a] = -1;
+    auto take = [&](const std::array<int, Dim>& ijk) {
+      for (int a = 0; a < Dim; ++a) nodes.lo[a] = std::min(nodes.lo[a], ijk[a]), nodes.hi[a] = std::max(nodes.hi[a], ijk[a]);
+    };
+    NodeBox<Dim> scan = grid_.all_nodes();
+    if (!within.empty())
+      for (int a = 0; a < Dim; ++a) scan.lo[a] = within.lo[a], scan.hi[a] = within.hi[a] + Shape::degree;
+    grid_.for_each_node(scan, [&](std::size_t i, const std::array<int, Dim>& ijk) {
+      if (phi_[i] > kWetPhase) take(ijk);
+    });
+    // node i's clamped B-spline lives on cells i - p ... i
+    NodeBox<Dim> cells;
+    for (int a = 0; a < Dim; ++a) {
+      cells.lo[a] = nodes.hi[a] < 0 ? std::numeric_limits<int>::max() : std::max(0, nodes.lo[a] - Shape::degree);
+      cells.hi[a] = std::min(grid_.axis(a).cells - 1, nodes.hi[a]);
+      if (!soil.empty()) {
+        cells.lo[a] = std::min(cells.lo[a], soil.lo[a]);
+        cells.hi[a] = std::max(cells.hi[a], soil.hi[a] - Shape::degree);
+      }
+    }
+    return cells;
+  }
+
+  /// The content widened by `factor` kHalo cells (and `current` kept), clipped to the grid, and
+  /// reaching every grid face with a prescribed pressure (the pressure acts through the air).
+  NodeBox<Dim> wanted_region(const NodeBox<Dim>& soil, const NodeBox<Dim>& current, int factor) const {
+    const NodeBox<Dim> all = all_cells(), c = content(soil, current);
+    if (c.empty()) return all;  // neither water nor soil: the whole grid
+    NodeBox<Dim> r;
+    for (int a = 0; a < Dim; ++a) {
+      r.lo[a] = std::max(all.lo[a], c.lo[a] - factor * kHalo);
+      r.hi[a] = std::min(all.hi[a], c.hi[a] + factor * kHalo);
+      if (!current.empty()) r.lo[a] = std::min(r.lo[a], current.lo[a]), r.hi[a] = std::max(r.hi[a], current.hi[a]);
+    }
+    for (const auto& pf : pressure_faces_) (pf.side == 0 ? r.lo[pf.axis] : r.hi[pf.axis]) = pf.side == 0 ? all.lo[pf.axis] : all.hi[pf.axis];
+    return r;
+  }
+
+  /// True while the water and the soil stay more than p cells inside every face of the region
+  /// that lies inside the grid.
+  bool region_holds_content(const NodeBox<Dim>& soil) const {
+    const NodeBox<Dim> c = content(soil, region_), all = all_cells();
+    for (int a = 0; a < Dim; ++a) {
+      if (region_.lo[a] > all.lo[a] && c.lo[a] - region_.lo[a] < Shape::degree) return false;
+      if (region_.hi[a] < all.hi[a] && region_.hi[a] - c.hi[a] < Shape::degree) return false;
+    }
+    return true;
+  }
+
+  /// The fluid and the phase field on the cells `region`: their grid, pattern and conditions,
+  /// and the nodal state copied from the whole grid's.
+  void set_region(const NodeBox<Dim>& region, bool count = true) {
+    Vec<Dim> lo, hi;
+    for (int a = 0; a < Dim; ++a) {
+      lo[a] = grid_.min()[a] + region.lo[a] * grid_.h();
+      hi[a] = grid_.min()[a] + (region.hi[a] + 1) * grid_.h();
+    }
+    const bool first = fmap_.empty();
+    bool same = !first;
+    for (int a = 0; a < Dim && same; ++a) same = region.lo[a] == region_.lo[a] && region.hi[a] == region_.hi[a];
+    region_ = region;
+    if (!same) {
+      fgrid_ = Grid<Dim>(lo, hi, grid_.h(), Shape::degree, true);
+      fmap_.resize(fgrid_.num_nodes());
+      fgrid_.for_each_node(fgrid_.all_nodes(), [&](std::size_t j, std::array<int, Dim> ijk) {
+        for (int a = 0; a < Dim; ++a) ijk[a] += region.lo[a];
+        fmap_[j] = grid_.index(ijk);
+      });
+      fluid_.setup(fgrid_, props_, region_conditions(region));
+      phase_.setup(fgrid_, fluid_.basis(), phase_prm_);
+      fsoil_.resize(fgrid_.num_nodes());
+      if (count && !first) ++region_changes_;
+    }
+    for (std::size_t j = 0; j < fmap_.size(); ++j) {
+      const std::size_t i = fmap_[j];
+      fluid_.v[j] = v_[i];
+      fluid_.v_old[j] = v_old_[i];
+      fluid_.p[j] = p_[i];
+      fluid_.phi[j] = phi_[i];
+    }
+    fluid_.refactorise();
+  }
+
+  /// The soil's nodal fields onto the region's nodes.
+  void gather_soil() {
+    const std::size_t n = fmap_.size();
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::size_t i = fmap_[j];
+      fsoil_.n[j] = soil_.n[i];
+      fsoil_.theta[j] = soil_.theta[i];
+      fsoil_.k[j] = soil_.k[i];
+      fsoil_.rho_p[j] = soil_.rho_p[i];
+      fsoil_.vs[j] = soil_.vs[i];
+    }
+  }
+  /// The fluid's new state back onto the whole grid's nodes.
+  void scatter_fluid() {
+    const std::size_t n = fmap_.size();
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::size_t i = fmap_[j];
+      v_[i] = fluid_.v[j];
+      v_old_[i] = fluid_.v_old[j];
+      p_[i] = fluid_.p[j];
+      phi_[i] = fluid_.phi[j];
+    }
+  }
+
   /// p at t = 0: hydrostatic under the phase field's water, rho(phi) |g| integrated down each
-  /// vertical line of nodes from the top (p = 0 there); the first step's solve replaces it, and
-  /// the soil's first pressure force reads the solved one. It spares the first steps the
-  /// pressure increment from zero to hydrostatic (PSPG on the increment, fem/fluid.hpp).
-  void initial_hydrostatic_pressure(const scene::Scene& s) {
+  /// vertical line of the fluid region's nodes from its top (p = 0 there); the first step's solve
+  /// replaces it, and the soil's first pressure force reads the solved one. It spares the first
+  /// steps the pressure increment from zero to hydrostatic (PSPG on the increment, fem/fluid.hpp).
+  /// False when there is none (no gravity, or gravity ramped).
+  bool initial_hydrostatic_pressure(const scene::Scene& s) {
     const double g = -s.gravity[1];
-    if (!(g > 0.0) || s.gravity_ramp > 0.0 || s.initialisation.enabled()) return;
-    const auto& nn = grid_.nodes_per_axis();
-    const auto& pr = fluid_.properties();
-    NodeBox<Dim> top = grid_.all_nodes();
-    top.lo[1] = top.hi[1] = nn[1] - 1;
-    grid_.for_each_node(top, [&](std::size_t, std::array<int, Dim> ijk) {
+    if (!(g > 0.0) || s.gravity_ramp > 0.0 || s.initialisation.enabled()) return false;
+    const auto& pr = props_;
+    // down the region's own grid (its node positions: clamped B-splines at its faces), onto the
+    // whole grid's nodes by fmap_
+    const Grid<Dim>& fg = fgrid_;
+    const int j_top = fg.nodes_per_axis()[1] - 1;
+    NodeBox<Dim> top = fg.all_nodes();
+    top.lo[1] = top.hi[1] = j_top;
+    fg.for_each_node(top, [&](std::size_t, std::array<int, Dim> ijk) {
       double pp = 0.0;
-      for (int j = nn[1] - 1; j >= 0; --j) {
+      for (int j = j_top; j >= 0; --j) {
         ijk[1] = j;
-        const std::size_t i = grid_.index(ijk);
-        if (j < nn[1] - 1) {
+        const std::size_t i = fmap_[fg.index(ijk)];
+        if (j < j_top) {
           auto up = ijk;
           up[1] = j + 1;
-          const std::size_t iu = grid_.index(up);
-          const double phi = std::clamp(0.5 * (fluid_.phi[i] + fluid_.phi[iu]), 0.0, 1.0);
-          pp += (pr.rho_w * phi + pr.rho_a * (1.0 - phi)) * g * (grid_.node_position(up)[1] - grid_.node_position(ijk)[1]);
+          const std::size_t iu = fmap_[fg.index(up)];
+          const double phi = std::clamp(0.5 * (phi_[i] + phi_[iu]), 0.0, 1.0);
+          pp += (pr.rho_w * phi + pr.rho_a * (1.0 - phi)) * g * (fg.node_position(up)[1] - fg.node_position(ijk)[1]);
         }
-        fluid_.p[i] = pp;
+        p_[i] = pp;
       }
     });
+    return true;
   }
 
   /// (i)-(ii) Soil P2G and the fluid's view of the soil.
@@ -496,7 +697,7 @@ class MpmFem final : public Formulation<Dim> {
     ParticleSet<Dim>& ps = st.solid;
     const std::size_t nodes = grid_.num_nodes();
     if (ps.size() == 0) {
-      soil_.resize(nodes);
+      if (soil_.n.size() != nodes) soil_.resize(nodes);
       return;
     }
     long bad = -1;
@@ -522,7 +723,14 @@ class MpmFem final : public Formulation<Dim> {
         s.mk += N * ps.m[p] * k;
       });
     });
-    soil_.resize(nodes);  // n = 1, theta = k = 0, v_s = 0 where no soil
+    // n = 1, theta = k = 0, v_s = 0 where no soil: reset where the soil was (its last node box)
+    if (soil_.n.size() != nodes) soil_.resize(nodes);
+    grid_.parallel_for_each_node(soil_box_, [&](std::size_t i, const auto&) {
+      soil_.n[i] = 1.0;
+      soil_.theta[i] = soil_.rho_p[i] = soil_.k[i] = 0.0;
+      soil_.vs[i].setZero();
+    });
+    soil_box_ = box_;
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       const double m = solid_.acc[i].m;
       if (!(m > transfer::empty_node_mass)) {
@@ -545,16 +753,15 @@ class MpmFem final : public Formulation<Dim> {
   void fluid_on_soil(double) {
     std::fill(soil_force_.begin(), soil_force_.end(), Vec<Dim>::Zero());
     std::fill(drag_.begin(), drag_.end(), 0.0);
-    std::array<int, Dim> cells;
-    for (int a = 0; a < Dim; ++a) cells[a] = grid_.axis(a).cells;
+    // the cells with a node in the soil's node box
+    std::array<int, Dim> lo, hi;
+    for (int a = 0; a < Dim; ++a) lo[a] = std::max(0, box_.lo[a] - (S - 1)), hi[a] = std::min(grid_.axis(a).cells - 1, box_.hi[a]);
     const int threads = omp_get_max_threads();
     if (static_cast<int>(cell_.size()) < threads) cell_.resize(threads);
-    const auto& pr = fluid_.properties();
-    fem::for_each_cell_coloured<Dim, S>(cells, [&](const std::array<int, Dim>& c) {
-      for (int a = 0; a < Dim; ++a)
-        if (c[a] + S - 1 < box_.lo[a] || c[a] > box_.hi[a]) return;
+    const auto& pr = props_;
+    fem::for_each_cell_coloured<Dim, S>(lo, hi, [&](const std::array<int, Dim>& c) {
       typename Basis::Cell& cl = cell_[omp_get_thread_num()];
-      fluid_.basis().eval(c, cl);
+      basis_.eval(c, cl);
       bool soil = false;
       for (int k = 0; k < Basis::K; ++k) soil = soil || solid_.acc[cl.node[k]].m > transfer::empty_node_mass;
       if (!soil) return;
@@ -568,11 +775,11 @@ class MpmFem final : public Formulation<Dim> {
           const double N = cl.N[gp][kk];
           n += N * soil_.n[i];
           gn += soil_.n[i] * cl.dN[gp][kk];
-          pp += N * fluid_.p[i];
+          pp += N * p_[i];
           theta += N * soil_.theta[i];
           k += N * soil_.k[i];
-          phi += N * fluid_.phi[i];
-          vf += N * fluid_.v_old[i];
+          phi += N * phi_[i];
+          vf += N * v_old_[i];
           vs += N * soil_.vs[i];
         }
         phi = std::clamp(phi, 0.0, 1.0);
@@ -601,7 +808,7 @@ class MpmFem final : public Formulation<Dim> {
       const Vec<Dim> vL = solid_.vL[i];
       const Vec<Dim> F = local_damping<Dim>(Vec<Dim>(nd.f + soil_force_[i]), vL, alpha);
       const double Q = drag_[i];
-      solid_.v[i] = (m * vL + dt * (F + Q * fluid_.v[i])) / (m + dt * Q);
+      solid_.v[i] = (m * vL + dt * (F + Q * v_[i])) / (m + dt * Q);
     });
     bcs_solid_.apply(grid_, box_, solid_.v, true);
   }
@@ -637,8 +844,9 @@ class MpmFem final : public Formulation<Dim> {
 
   /// A non-finite nodal velocity, pressure or phase field: the node is reported.
   void check_fluid(State<Dim>& st) const {
-    for (std::size_t i = 0; i < fluid_.p.size(); ++i)
-      if (!std::isfinite(fluid_.p[i]) || !fluid_.v[i].allFinite()) {
+    for (std::size_t j = 0; j < fluid_.p.size(); ++j)
+      if (!std::isfinite(fluid_.p[j]) || !fluid_.v[j].allFinite()) {
+        const std::size_t i = fmap_[j];
         const Vec<Dim> x = grid_.node_position(grid_ijk(i));
         st.health.report_node(static_cast<long>(i), {x[0], x[1], Dim == 3 ? x[Dim - 1] : 0.0}, "fluid",
                               "fluid velocity or pressure not finite");
@@ -672,12 +880,12 @@ class MpmFem final : public Formulation<Dim> {
     double sum = 0.0;
     typename Basis::Cell c;
     NodeBox<Dim> cells;
-    for (int a = 0; a < Dim; ++a) cells.lo[a] = 0, cells.hi[a] = grid_.axis(a).cells - 1;
+    for (int a = 0; a < Dim; ++a) cells.lo[a] = 0, cells.hi[a] = fgrid_.axis(a).cells - 1;
     fem::FluidPoint<Dim> f;
-    grid_.for_each_node(cells, [&](std::size_t, const std::array<int, Dim>& ijk) {
+    fgrid_.for_each_node(cells, [&](std::size_t, const std::array<int, Dim>& ijk) {
       fluid_.basis().eval(ijk, c);
       for (int gp = 0; gp < Basis::G; ++gp) {
-        fluid_.fields_at(c, gp, soil_, f);
+        fluid_.fields_at(c, gp, fsoil_, f);
         // fields_at's v is v^L of the coming step: the current nodal velocity
         sum += c.JxW[gp] * g(f);
       }
@@ -694,6 +902,22 @@ class MpmFem final : public Formulation<Dim> {
   PhaseMaterials<Dim> phase_materials_;  // initialisation.materials: swapped in by set_initialisation
   std::vector<porous::Permeability> perm_;  // per material (soils)
   double to_intrinsic_ = 0.0;               // k [m^2] per k_h [m/s]: mu_w / (rho_w g)
+  fem::FluidProperties props_;
+  struct FaceCondition {
+    std::uint8_t bits = 0;  // Fluid::Conditions::fixed's bits
+    double value = 0.0;     // Pa, the prescribed pressure of an open face
+  };
+  std::array<FaceCondition, 2 * Dim> faces_;  // x_min, x_max, y_min, ...
+  bool whole_grid_ = false;                    // solver.air.domain "grid"
+  NodeBox<Dim> region_;                        // cells of grid_ the fluid is solved on
+  Grid<Dim> fgrid_;                            // those cells as a grid (clamped B-splines)
+  std::vector<std::size_t> fmap_;              // fgrid_'s node -> grid_'s node
+  long region_changes_ = 0;
+  std::vector<Vec<Dim>> v_, v_old_;  // m/s, the fluid's v^L, v^{L-1} on grid_'s nodes (0 outside the region)
+  std::vector<double> p_, phi_;      // Pa and the phase field on grid_'s nodes
+  fem::SoilOnGrid<Dim> fsoil_;       // soil_ on fgrid_'s nodes
+  NodeBox<Dim> soil_box_;            // the soil's node box of the last step (soil_ set there)
+  fem::PhaseFieldParameters phase_prm_;
   fem::Fluid<Dim, Shape> fluid_;
   struct PressureFace {
     int axis, side;
@@ -715,6 +939,7 @@ class MpmFem final : public Formulation<Dim> {
   std::vector<Vec<Dim>> soil_force_;  // N: the fluid's pressure on the skeleton (v)
   std::vector<double> drag_;          // kg/s: Q_I (v)
   std::vector<double> support_;       // m^Dim: Omega_I = int N_I
+  Basis basis_;  // the B-splines on grid_'s cells (the soil's); fluid_.basis() is the region's
   std::vector<typename Basis::Cell> cell_;
   NodeBox<Dim> box_;
   std::vector<shape::ShapeData<Dim, S>> sd_;

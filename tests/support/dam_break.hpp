@@ -33,6 +33,7 @@ struct FrontError {
   int compared = 0;     // frames compared
   double worst = 0.0;   // largest |x/a - Z| / Z
   double phi_lo = 1.0, phi_hi = 0.0;  // the phase field's range over the frames
+  std::vector<double> x_over_a;  // the front of each frame compared, x / a
 };
 
 /// The run's fronts against the table (a = 57.15 mm, h = a/10, g = 9.81), printed with `label`.
@@ -56,6 +57,7 @@ inline FrontError dam_break_front_error(const std::string& run, const std::strin
     const double err = (x / a - Z) / Z;
     std::printf("%s: T = %.2f, x/a = %.3f, Martin & Moyce %.3f (%+.1f %%)\n", label, T, x / a, Z, 100 * err);
     out.worst = std::max(out.worst, std::abs(err));
+    out.x_over_a.push_back(x / a);
     ++out.compared;
   }
   return out;

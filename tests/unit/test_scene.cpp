@@ -983,17 +983,19 @@ TEST(Scene, MpmFemAirAndPhaseFieldDefaultsAndRoundTrip) {
   EXPECT_FALSE(s.solver.phase_field.mobility);
   EXPECT_DOUBLE_EQ(s.materials[0].at("grain_diameter"), 0.003);
   const json resolved = to_json(s);
-  EXPECT_EQ(resolved["solver"]["air"], json({{"density", 1.2}, {"dynamic_viscosity", 1.8e-5}}));
+  EXPECT_EQ(resolved["solver"]["air"], json({{"density", 1.2}, {"domain", "active"}, {"dynamic_viscosity", 1.8e-5}}));
+  EXPECT_FALSE(s.solver.air.whole_grid);
   EXPECT_EQ(resolved["solver"]["phase_field"], json({{"lsic", false}, {"volume_correction", true}}));
   EXPECT_EQ(resolved["materials"][0]["grain_diameter"], 0.003);
   EXPECT_EQ(to_json(parse_scene(resolved, "t.json")), resolved);
 
   json j = swmpm::testing::mpm_fem_scene();
-  j["solver"] = {{"air", {{"density", 1.25}, {"dynamic_viscosity", 2e-5}}},
+  j["solver"] = {{"air", {{"density", 1.25}, {"dynamic_viscosity", 2e-5}, {"domain", "grid"}}},
                  {"phase_field", {{"interface_width", 0.06}, {"mobility", 200}}}};
   const Scene t = parse_scene(j, "t.json");
   EXPECT_DOUBLE_EQ(t.solver.air.density, 1.25);
   EXPECT_DOUBLE_EQ(t.solver.air.dynamic_viscosity, 2e-5);
+  EXPECT_TRUE(t.solver.air.whole_grid);
   ASSERT_TRUE(t.solver.phase_field.interface_width && t.solver.phase_field.mobility);
   EXPECT_DOUBLE_EQ(*t.solver.phase_field.interface_width, 0.06);
   EXPECT_DOUBLE_EQ(*t.solver.phase_field.mobility, 200);
