@@ -19,6 +19,7 @@
 #include "scene/budget.hpp"
 #include "scene/files.hpp"
 #include "scene/input.hpp"
+#include "scene/pointcloud.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -269,13 +270,21 @@ std::vector<std::string> field_pictures(const fs::path& plots) {
 
 /// The last frame's pictures when the run has none yet: the soil's displacement and, when its
 /// points carry pore water, the pore pressure; a run of free water only (no soil points in its
-/// solid frames) shows its water points' speed.
+/// solid frames) shows its water: mpm-fem's grid fields (the phase field and the pressure), or
+/// the water points' speed.
 void draw_last_frame(const std::string& run_dir) {
   const RunSeries solid(run_dir, "solid");
   const double t_last = solid.frames().back().time;
   const scene::PointCloud last = solid.load(solid.nearest_frame(t_last));
   if (last.size() == 0) {
-    plot_fields(run_dir, "velocity_magnitude", {t_last}, "fluid");
+    bool grid = false;
+    for (const auto& e : scene::read_pvd((fs::path(run_dir) / "output" / "results.pvd").string())) grid = grid || e.group == "grid";
+    if (grid) {
+      plot_fields(run_dir, "phase_field", {t_last}, "grid");
+      plot_fields(run_dir, "pressure", {t_last}, "grid");
+    } else {
+      plot_fields(run_dir, "velocity_magnitude", {t_last}, "fluid");
+    }
     return;
   }
   plot_fields(run_dir, "displacement_magnitude", {t_last});

@@ -111,3 +111,22 @@ TEST(ReportHtml, SaturatedSlopeReportRendersInHeadlessChromium) {
   ASSERT_TRUE(fs::exists(shot));
   EXPECT_GT(fs::file_size(shot), 50'000u) << "a page of tables and plots is more than a blank screenshot";
 }
+
+// A run of free water only in mpm-fem (the dam break, cut to 0.02 s): no soil points and no water
+// points, the water lives on the grid. `swmpm run` used to fail in its report ("the frames have
+// neither half_size nor volume"); the report now shows the grid's phase field and pressure.
+TEST(ReportHtml, FreeWaterOnTheGridReportShowsThePhaseFieldAndPressure) {
+  json s = swmpm::testing::load_json(SWMPM_SOURCE_DIR "/examples/dam-break-mpm-fem/scene.json");
+  s["time"]["end"] = 0.02;
+  s["output"]["interval"] = 0.01;
+  const fs::path dir = swmpm::testing::scratch("report-html-free-water");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const fs::path run = dir / "run";
+  const Result r = swmpm_cmd("run " + (dir / "scene.json").string() + " -o " + run.string() + " -q", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string md = swmpm::testing::read_text((run / "report.md").string());
+  for (const char* f : {"phase_field", "pressure"})
+    EXPECT_NE(md.find("](plots/field_" + std::string(f) + "_0.02.png)"), std::string::npos) << f << "\n" << md;
+  const std::string html = swmpm::testing::read_text((run / "report.html").string());
+  EXPECT_EQ(count(html, "src=\"data:image/png;base64,iVBORw0KGgo"), count(md, "!["));
+}

@@ -234,3 +234,14 @@ TEST(Resume, MpmFemMultiRateResumesInsideAGroupOfSoilSteps) {
   const Pair p = run_killed_and_resumed(s, "mpmfem-multirate", 3);
   expect_identical(p, "mpm-fem");
 }
+
+TEST(Resume, MpmFemDamBreakResumesAfterItsRegionGrew) {
+  // The fluid's active region grows with the surge (7 times over the example's 0.2 s): the
+  // checkpoint holds the region, and a resumed run solves on the one the saving run had.
+  json s = shortened(example("dam-break-mpm-fem/scene.json"), 0.1, 5);
+  s["output"]["checkpoint_interval"] = 0.011;
+  const Pair p = run_killed_and_resumed(s, "mpmfem-region", 4);
+  expect_identical(p, "mpm-fem");
+  const json r = swmpm::testing::load_json((p.resumed / "run.json").string());
+  EXPECT_GE(r["counters"]["fluid region changes"].get<double>(), 1.0);
+}
