@@ -72,7 +72,10 @@ std::vector<scene::BodyCount> body_counts(const scene::Scene& s, const std::vect
     const int m = s.dimension == 3 ? 16 : 64;  // samples per axis
     std::array<int, 3> per{1, 1, 1};
     for (int a = 0; a < s.dimension; ++a) per[a] = std::min(m, l.count[a]);
-    double inside = 0.0;
+    double inside = 0.0, wet = 0.0;
+    // a body with a water table carries water below it only (the solver's points above are dry)
+    const auto& ini = s.bodies[b].initial;
+    const double table = ini.hydrostatic && ini.water_table ? *ini.water_table : std::numeric_limits<double>::infinity();
     for (int k = 0; k < per[2]; ++k)
       for (int j = 0; j < per[1]; ++j)
         for (int i = 0; i < per[0]; ++i) {
@@ -80,10 +83,13 @@ std::vector<scene::BodyCount> body_counts(const scene::Scene& s, const std::vect
           Point x{0.0, 0.0, 0.0};
           for (int a = 0; a < s.dimension; ++a)
             x[a] = s.grid.min[a] + l.c_lo[a] * s.grid.cell_size + (ijk[a] + 0.5) / per[a] * l.count[a] * l.dx;
-          if (shapes[b]->inside(x)) inside += 1.0;
+          if (shapes[b]->inside(x)) {
+            inside += 1.0;
+            if (x[1] < table) wet += 1.0;
+          }
         }
-    const double share = inside / (double(per[0]) * per[1] * per[2]);
-    out.push_back({share * l.points(), l.points()});
+    const double samples = double(per[0]) * per[1] * per[2];
+    out.push_back({inside / samples * l.points(), l.points(), wet / samples * l.points()});
   }
   return out;
 }

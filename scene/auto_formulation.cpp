@@ -1,9 +1,11 @@
 #include "scene/auto_formulation.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <vector>
 
 #include "scene/budget.hpp"
 #include "scene/formulations.hpp"
@@ -56,12 +58,51 @@ double particles_of(const Scene& s, const Body& b) {
   return body_volume(s, b) * std::pow(b.particles_per_cell / s.grid.cell_size, s.dimension);
 }
 
+/// The share of a body's volume below its water table (1 without one): exact for box and polygon
+/// (the polygon clipped to y < table); 1 for the other geometries, whose shape only preprocess
+/// knows (an over-estimate of the water points, never an under-estimate).
+double wet_share(const Scene& s, const Body& b) {
+  if (!b.initial.hydrostatic || !b.initial.water_table) return 1.0;
+  const double table = *b.initial.water_table;
+  const Geometry& g = b.geometry;
+  if (g.type == "box") {
+    const double lo = g.min[1], hi = g.max[1];
+    return hi > lo ? std::clamp((table - lo) / (hi - lo), 0.0, 1.0) : 1.0;
+  }
+  if (g.type == "polygon" && s.dimension == 2) {
+    // Sutherland–Hodgman against the half-plane y <= table, then the shoelace formula.
+    std::vector<std::array<double, 2>> clipped;
+    const std::size_t n = g.vertices.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& p = g.vertices[i];
+      const auto& q = g.vertices[(i + 1) % n];
+      const bool p_in = p[1] <= table, q_in = q[1] <= table;
+      if (p_in) clipped.push_back({p[0], p[1]});
+      if (p_in != q_in) {
+        const double t = (table - p[1]) / (q[1] - p[1]);
+        clipped.push_back({p[0] + t * (q[0] - p[0]), table});
+      }
+    }
+    double twice = 0.0;
+    for (std::size_t i = 0; i < clipped.size(); ++i) {
+      const auto& p = clipped[i];
+      const auto& q = clipped[(i + 1) % clipped.size()];
+      twice += p[0] * q[1] - q[0] * p[1];
+    }
+    const double whole = body_volume(s, b);
+    return whole > 0.0 ? std::clamp(0.5 * std::abs(twice) / whole, 0.0, 1.0) : 1.0;
+  }
+  return 1.0;
+}
+
 /// Points formulation f carries: a double-point one has a water point beside each soil point of a
-/// saturated body.
+/// saturated body (below its water table, when it has one).
 double points_of(const Scene& s, Formulation f) {
   double points = 0.0;
-  for (const Body& b : s.bodies)
-    points += particles_of(s, b) * (row_of(f).water.fluid_particles && !b.solid.empty() && !b.fluid.empty() ? 2.0 : 1.0);
+  for (const Body& b : s.bodies) {
+    const bool water_points = row_of(f).water.fluid_particles && !b.solid.empty() && !b.fluid.empty();
+    points += particles_of(s, b) * (1.0 + (water_points ? wet_share(s, b) : 0.0));
+  }
   return points;
 }
 

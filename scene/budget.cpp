@@ -56,14 +56,15 @@ double node_bytes(const Scene& s) {
 }
 
 /// Points a body of `particles` seeds in the solver: double-point bodies with soil and water have
-/// one set of each; mpm-fem's free water lives on the grid.
-double solver_points(const Scene& s, std::size_t b, double particles) {
+/// one set of each (the water's only below a water table: `wet` of them, < 0 all); mpm-fem's
+/// free water lives on the grid.
+double solver_points(const Scene& s, std::size_t b, double particles, double wet) {
   const WaterLayout w = row_of(s.formulation).water;
   const Body& body = s.bodies[b];
-  double sets = body.solid.empty() ? 0.0 : 1.0;
-  if (w.fluid_particles && !body.fluid.empty()) sets += 1.0;
-  if (!w.fluid_particles && !w.free_water_on_grid && body.solid.empty()) sets = 1.0;
-  return sets * particles;
+  if (!w.fluid_particles && !w.free_water_on_grid && body.solid.empty()) return particles;
+  double points = body.solid.empty() ? 0.0 : particles;
+  if (w.fluid_particles && !body.fluid.empty()) points += body.solid.empty() || wet < 0.0 ? particles : wet;
+  return points;
 }
 
 /// Bytes preprocess holds per particle while it seeds: the seed points, the kept copy, the clouds.
@@ -190,7 +191,7 @@ void check_memory(const Scene& s, const std::string& scene_file, const std::vect
   std::size_t largest = 0;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     particles += bodies[b].particles;
-    points += solver_points(s, b, bodies[b].particles);
+    points += solver_points(s, b, bodies[b].particles, bodies[b].wet);
     scanned += bodies[b].scanned;
     if (bodies[b].particles > bodies[largest].particles) largest = b;
   }

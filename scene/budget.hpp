@@ -47,6 +47,7 @@ double run_memory(const Scene& s, double points);
 struct BodyCount {
   double particles = 0.0;  // estimated particles of the body (inside its geometry)
   double scanned = 0.0;    // lattice points of its bounding box that seeding visits
+  double wet = -1.0;       // of `particles`, those that carry pore water (below a water table); < 0: all
 };
 
 /// Refuses (SceneError naming `scene_file` and the key) a scene whose grid alone, or whose run with

@@ -197,6 +197,35 @@ TEST(AutoFormulation, SoilThatCanLiquefyTakesTheCheaperDoublePoint) {
   EXPECT_NE(sc.formulation_reason.find("can liquefy"), std::string::npos) << sc.formulation_reason;
 }
 
+// A body with a water table carries water points below the table only (issue 26 item 3): the
+// double-point candidates' estimates count them so. A box 2 x 1 m with the table at 0.25 m carries
+// 1.25 points per particle, not 2; a right triangle with legs 2 and 1 m (the right angle at the
+// origin) clipped at y = 0.5 keeps 3/4 of its area below, so 1.75.
+TEST(AutoFormulation, WaterPointsOnlyBelowTheWaterTable) {
+  json s = json::parse(std::ifstream(SWMPM_SOURCE_DIR "/examples/landslide-nor-sand/scene-loose.json"));
+  s["formulation"] = "auto";
+  s["grid"]["min"] = {0.0, 0.0};
+  s["grid"]["max"] = {2.5, 1.5};
+  s["boundaries"] = json::array();
+  auto& body = s["bodies"][0];
+  body["geometry"] = {{"type", "box"}, {"min", {0.0, 0.0}}, {"max", {2.0, 1.0}}};
+  body["initial"]["pore_pressure"] = "hydrostatic";
+  auto points_of = [&](const json& j, Formulation f) {
+    const FormulationChoice c = choose_formulation(parse_scene(j, "t.json"));
+    EXPECT_EQ(c.rule, "liquefiable");
+    return estimate_of(c, f).points / c.points;
+  };
+  EXPECT_NEAR(points_of(s, Formulation::explicit_double_point), 2.0, 1e-12);  // saturated to the top
+  body["initial"]["water_table"] = 0.25;
+  EXPECT_NEAR(points_of(s, Formulation::explicit_double_point), 1.25, 1e-12);
+  EXPECT_NEAR(points_of(s, Formulation::semi_implicit_double_point), 1.25, 1e-12);
+  body["initial"]["water_table"] = -1.0;  // below the body: refused by preprocess, counted dry here
+  EXPECT_NEAR(points_of(s, Formulation::explicit_double_point), 1.0, 1e-12);
+  body["geometry"] = {{"type", "polygon"}, {"vertices", {{0.0, 0.0}, {2.0, 0.0}, {0.0, 1.0}}}};
+  body["initial"]["water_table"] = 0.5;
+  EXPECT_NEAR(points_of(s, Formulation::explicit_double_point), 1.75, 1e-12);
+}
+
 // A key only the formulation auto did not choose reads: an error naming the key's path, the
 // chosen formulation, and that auto chose it.
 TEST(AutoFormulation, AKeyTheChosenFormulationDoesNotReadIsAnError) {
@@ -252,4 +281,19 @@ TEST(RunEstimate, MpmFemCountsTheGridOncePerFluidStep) {
   // Other formulations do not read the key: their estimate is unchanged by it.
   EXPECT_DOUBLE_EQ(step_microseconds(three, Formulation::explicit_double_point, points),
                    step_microseconds(one, Formulation::explicit_double_point, points));
+}
+
+// preprocess's memory check counts a double-point body's water points below its water table
+// only (BodyCount::wet, sampled with the body's particles): a million particles of which none are
+// wet fit where a fully saturated million would not.
+TEST(RunEstimate, MemoryCheckCountsWaterPointsBelowTheWaterTableOnly) {
+  json s = json::parse(std::ifstream(SWMPM_SOURCE_DIR "/examples/landslide-nor-sand/scene-loose.json"));
+  s["formulation"] = "explicit-double-point";
+  const Scene sc = parse_scene(s, "t.json");
+  const double particles = 1e6;
+  const MemoryLimit limit{run_memory(sc, 1.5 * particles), "the test's limit"};
+  EXPECT_NO_THROW(check_memory(sc, "t.json", {BodyCount{particles, particles, 0.0}}, limit));
+  EXPECT_NO_THROW(check_memory(sc, "t.json", {BodyCount{particles, particles, 0.4 * particles}}, limit));
+  EXPECT_THROW(check_memory(sc, "t.json", {BodyCount{particles, particles, -1.0}}, limit), SceneError);
+  EXPECT_THROW(check_memory(sc, "t.json", {BodyCount{particles, particles, 0.6 * particles}}, limit), SceneError);
 }
