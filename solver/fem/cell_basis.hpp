@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "solver/common.hpp"
@@ -143,38 +144,11 @@ class CellBasis {
   std::array<int, Dim> nodes_{};
 };
 
-/// Cells of a grid in S^Dim colours (c_a mod S per axis): two cells of one colour share no
-/// node, so a colour's cells assemble in parallel without races, and every sum over cells at a
-/// node has one order (colour by colour, one cell per colour) whatever the thread count.
-template <int Dim, int S, class Fn>
-void for_each_cell_coloured(const std::array<int, Dim>& cells, Fn&& fn) {
-  constexpr int colours = ipow(S, Dim);
-  for (int colour = 0; colour < colours; ++colour) {
-    std::array<int, Dim> first{}, count{};
-    long total = 1;
-    int r = colour;
-    for (int a = 0; a < Dim; ++a) {
-      first[a] = r % S;
-      r /= S;
-      count[a] = first[a] < cells[a] ? (cells[a] - first[a] + S - 1) / S : 0;
-      total *= count[a];
-    }
-#pragma omp parallel for schedule(static) if (total > 256)
-    for (long t = 0; t < total; ++t) {
-      std::array<int, Dim> c;
-      long q = t;
-      for (int a = 0; a < Dim; ++a) {
-        c[a] = first[a] + static_cast<int>(q % count[a]) * S;
-        q /= count[a];
-      }
-      fn(c);
-    }
-  }
-}
-
-/// for_each_cell_coloured over the cells lo ... hi only (inclusive, per axis), with the colours of
-/// the whole grid's loop (a cell's colour is its index mod S), so that a node's sums come in the
-/// same order as there.
+/// The cells lo ... hi (inclusive, per axis) in S^Dim colours (c_a mod S per axis): two cells of
+/// one colour share no node, so a colour's cells assemble in parallel without races, and every
+/// sum over cells at a node has one order (colour by colour, one cell per colour) whatever the
+/// thread count. A colour is a cell's index mod S, so a sub-box's loop sums each node in the
+/// order the whole grid's loop does.
 template <int Dim, int S, class Fn>
 void for_each_cell_coloured(const std::array<int, Dim>& lo, const std::array<int, Dim>& hi, Fn&& fn) {
   constexpr int colours = ipow(S, Dim);
@@ -200,6 +174,14 @@ void for_each_cell_coloured(const std::array<int, Dim>& lo, const std::array<int
       fn(c);
     }
   }
+}
+
+/// for_each_cell_coloured over all `cells` (per axis) of a grid.
+template <int Dim, int S, class Fn>
+void for_each_cell_coloured(const std::array<int, Dim>& cells, Fn&& fn) {
+  std::array<int, Dim> lo{}, hi{};
+  for (int a = 0; a < Dim; ++a) hi[a] = cells[a] - 1;
+  for_each_cell_coloured<Dim, S>(lo, hi, std::forward<Fn>(fn));
 }
 
 }  // namespace swmpm::fem
