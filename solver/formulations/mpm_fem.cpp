@@ -151,8 +151,7 @@ class MpmFem final : public Formulation<Dim> {
     support_.resize(nodes);
     for (std::size_t i = 0; i < nodes; ++i) support_[i] = porous::basis_integral<Shape>(grid_, i);
     basis_.build(grid_);
-    soil_box_ = NodeBox<Dim>{};
-    for (int a = 0; a < Dim; ++a) soil_box_.hi[a] = -1;  // empty
+    soil_box_ = empty_box();
     whole_grid_ = s.solver.air.whole_grid;
     set_region(whole_grid_ ? all_cells() : wanted_region(points_node_box(state.solid), empty_box(), 1));
     if (initial_hydrostatic_pressure(s)) set_region(region_, /*count=*/false);  // p copied onto the region
