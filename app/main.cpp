@@ -21,6 +21,7 @@
 #include "solver/element.hpp"
 #include "solver/output/checkpoint.hpp"
 #include "solver/run.hpp"
+#include "solver/parallel/comm.hpp"
 #include "study/study.hpp"
 #include "swmpm/version.hpp"
 
@@ -269,7 +270,7 @@ int element_command(const swmpm::scene::Scene& scene, const ElementArgs& a, bool
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int command(int argc, char** argv) {
   keep_freed_memory();
   CLI::App app{"swmpm — soil–water coupled large-deformation Material Point Method"};
   app.set_version_flag("--version", std::string("swmpm ") + swmpm::version + " (" + swmpm::git_hash + ")");
@@ -410,6 +411,8 @@ int main(int argc, char** argv) {
       }
     }
     if (*element) return element_command(swmpm::scene::load_scene(scene_path), el, quiet);
+  } catch (const swmpm::parallel::ElsewhereError&) {  // mpirun: the failing rank said why
+    return 2;
   } catch (const swmpm::scene::SceneError& e) {
     for (const auto& line : e.lines()) std::cerr << line << "\n";
     return 2;
@@ -427,4 +430,17 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  // Under mpirun (`mpirun -n N swmpm solve RUN_DIR`) MPI and PETSc start here; without it nothing does.
+  try {
+    swmpm::parallel::start(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "swmpm: " << e.what() << "\n";
+    return 1;
+  }
+  const int code = command(argc, argv);
+  swmpm::parallel::stop();
+  return code;
 }

@@ -1,7 +1,9 @@
 // frame_diff A.vtu B.vtu: the largest difference between two frames of the same run, per point
 // array, relative to that array's largest magnitude in A (and of the positions, relative to the
 // extent of A's points). Prints one line per array that differs and, last, "max_relative R".
-// bench/bitwise.py uses it to say by how much a case whose hashes moved differs.
+// bench/bitwise.py uses it to say by how much a case whose hashes moved differs. Points are matched
+// by their `id` array where both frames have one (a .pvtu of a run on several ranks holds them in
+// another order than the one-rank .vtu), else by position in the file.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -18,6 +20,23 @@ double relative(const std::vector<double>& a, const std::vector<double>& b) {
   }
   return scale > 0.0 ? diff / scale : diff;
 }
+/// The cloud with its points in increasing `id` (unchanged without an id array).
+swmpm::scene::PointCloud by_id(swmpm::scene::PointCloud c) {
+  const auto* id = c.find("id");
+  if (!id) return c;
+  std::vector<std::size_t> order(c.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return id->values[x] < id->values[y]; });
+  auto points = c.points;
+  for (std::size_t k = 0; k < order.size(); ++k) c.points[k] = points[order[k]];
+  for (auto& arr : c.arrays) {
+    const auto values = arr.values;
+    const auto n = static_cast<std::size_t>(arr.components);
+    for (std::size_t k = 0; k < order.size(); ++k)
+      for (std::size_t j = 0; j < n; ++j) arr.values[k * n + j] = values[order[k] * n + j];
+  }
+  return c;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -26,7 +45,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const auto a = swmpm::scene::read_vtu(argv[1]), b = swmpm::scene::read_vtu(argv[2]);
+    const auto a = by_id(swmpm::scene::read_vtu(argv[1])), b = by_id(swmpm::scene::read_vtu(argv[2]));
     if (a.size() != b.size() || a.arrays.size() != b.arrays.size()) {
       std::printf("structure differs: %zu/%zu points, %zu/%zu arrays\nmax_relative inf\n", a.size(), b.size(),
                   a.arrays.size(), b.arrays.size());

@@ -21,6 +21,9 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
+#include <vtkXMLPUnstructuredGridReader.h>
+#include <vtkXMLReader.h>
+#include <vtkXMLPUnstructuredGridWriter.h>
 
 namespace swmpm::scene {
 
@@ -56,7 +59,8 @@ struct Cells {
   int per_cell = 1;
 };
 
-void write_unstructured(const std::string& path, const PointCloud& cloud, const Cells& c, VtuCompression compression) {
+/// The cloud as a VTK grid that borrows the cloud's memory (the writers only read it).
+vtkSmartPointer<vtkUnstructuredGrid> as_grid(const std::string& path, const PointCloud& cloud, const Cells& c) {
   const auto n = static_cast<vtkIdType>(cloud.size());
   // The writer only reads: VTK arrays borrow the cloud's memory (SetArray with save = 1) instead of
   // copying it, which keeps a frame's peak memory to the cloud itself.
@@ -91,7 +95,12 @@ void write_unstructured(const std::string& path, const PointCloud& cloud, const 
     arr->SetName(a.name.c_str());
     grid->GetPointData()->AddArray(arr);
   }
+  return grid;
+}
 
+/// VTK's XML writer settings of every frame: appended raw binary, the scene's compression.
+template <class Writer>
+void configure(Writer* writer, VtuCompression compression) {
   // VTK reports a failed write on stderr once per block (megabytes of it on a full disk); the
   // error code is read instead and reported once, as a WriteError naming the file.
   static const bool quiet_vtk = [] {
@@ -99,8 +108,6 @@ void write_unstructured(const std::string& path, const PointCloud& cloud, const 
     return true;
   }();
   (void)quiet_vtk;
-  auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
-  writer->SetInputData(grid);
   writer->SetDataModeToAppended();
   writer->EncodeAppendedDataOff();  // raw binary
   switch (compression) {
@@ -115,6 +122,13 @@ void write_unstructured(const std::string& path, const PointCloud& cloud, const 
       writer->SetCompressorTypeToNone();
       break;
   }
+}
+
+void write_unstructured(const std::string& path, const PointCloud& cloud, const Cells& c, VtuCompression compression) {
+  auto grid = as_grid(path, cloud, c);
+  auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
+  writer->SetInputData(grid);
+  configure(writer.Get(), compression);
   files::write_atomically(path, [&](const std::string& temporary) {
     writer->SetFileName(temporary.c_str());
     const int ok = writer->Write();
@@ -139,6 +153,33 @@ void write_unstructured(const std::string& path, const PointCloud& cloud, const 
 }
 
 }  // namespace
+
+void write_pvtu_piece(const std::string& path, const PointCloud& cloud, int piece, int pieces,
+                      VtuCompression compression) {
+  auto grid = as_grid(path, cloud, Cells{});
+  auto writer = vtkSmartPointer<vtkXMLPUnstructuredGridWriter>::New();
+  writer->SetInputData(grid);
+  configure(writer.Get(), compression);
+  writer->SetFileName(path.c_str());
+  writer->SetNumberOfPieces(pieces);
+  writer->SetStartPiece(piece);
+  writer->SetEndPiece(piece);
+  // Every rank takes part in the summary (VTK's global controller gathers which pieces exist);
+  // rank 0 writes it.
+  writer->SetWriteSummaryFile(1);
+  const int ok = writer->Write();
+  const unsigned long code = writer->GetErrorCode();
+  if (ok != 1 || code != vtkErrorCode::NoError)
+    throw files::WriteError(path, code == vtkErrorCode::OutOfDiskSpaceError
+                                      ? std::string("No space left on device (or past the file size limit)")
+                                      : std::string("the parallel VTU writer failed (") +
+                                            vtkErrorCode::GetStringFromErrorCode(code) + ")");
+}
+
+std::string pvtu_piece_name(const std::string& pvtu_name, int piece) {
+  // VTK's name for a piece: the summary's name without ".pvtu", "_<piece>.vtu".
+  return pvtu_name.substr(0, pvtu_name.size() - 5) + "_" + std::to_string(piece) + ".vtu";
+}
 
 void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression compression) {
   // One vertex cell per particle, so ParaView shows points without a filter.
@@ -167,12 +208,16 @@ PointCloud read_vtu(const std::string& path) {
   // VTK would block on a FIFO and read a device without end: a regular file only. Frames of large
   // runs are big, so the bound is generous.
   check_input_file(path, "VTU file", std::uintmax_t{64} << 30);
-  auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  // A frame of a run on several ranks (mpirun) is a .pvtu over one piece per rank: read as one.
+  const bool pieces = path.size() > 5 && path.compare(path.size() - 5, 5, ".pvtu") == 0;
+  vtkSmartPointer<vtkXMLReader> reader;
+  if (pieces) reader = vtkSmartPointer<vtkXMLPUnstructuredGridReader>::New();
+  else reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
   reader->SetFileName(path.c_str());
   reader->Update();
-  vtkUnstructuredGrid* grid = reader->GetOutput();
+  vtkUnstructuredGrid* grid = vtkUnstructuredGrid::SafeDownCast(reader->GetOutputDataObject(0));
   if (grid == nullptr || reader->GetErrorCode() != 0)
-    throw std::runtime_error(path + ": not a readable VTU file");
+    throw std::runtime_error(path + (pieces ? ": not a readable PVTU file (or a piece is missing)" : ": not a readable VTU file"));
   PointCloud cloud;
   const vtkIdType n = grid->GetNumberOfPoints();
   cloud.points.resize(n);

@@ -46,7 +46,13 @@ void write_vtu(const std::string& path, const PointCloud& cloud, VtuCompression 
 /// order (x fastest): the grid fields a formulation adds to a frame. Written as write_vtu is.
 void write_lattice_vtu(const std::string& path, const PointCloud& cloud, const std::array<int, 3>& nodes,
                        VtuCompression compression = VtuCompression::zlib);
-/// Reads a .vtu written by write_vtu (or by another tool): every point-data array is returned.
+/// One rank's piece of a frame written by several ranks (mpirun): VTK's parallel writer writes
+/// the piece (pvtu_piece_name) and rank 0 the .pvtu summary that lists all `pieces` (collective
+/// over VTK's global controller, which solver/parallel/comm.cpp sets). Throws files::WriteError.
+void write_pvtu_piece(const std::string& path, const PointCloud& cloud, int piece, int pieces,
+                      VtuCompression compression = VtuCompression::zlib);
+std::string pvtu_piece_name(const std::string& pvtu_name, int piece);
+/// Reads a .vtu written by write_vtu (or a .pvtu over pieces) (or by another tool): every point-data array is returned.
 PointCloud read_vtu(const std::string& path);
 
 /// One entry of a ParaView time series.

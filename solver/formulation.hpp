@@ -92,7 +92,9 @@ struct State {
   void index_ids() {
     std::int64_t max_id = -1;
     for (auto i : solid.id) max_id = std::max(max_id, i);
-    index_of_id.assign(static_cast<std::size_t>(max_id + 1), -1);
+    // Under mpirun a rank holds some particles only: the table keeps the size of the whole set
+    // (every rank starts with all of them), and ids held elsewhere read -1.
+    index_of_id.assign(std::max(index_of_id.size(), static_cast<std::size_t>(max_id + 1)), -1);
     for (std::size_t p = 0; p < solid.size(); ++p) index_of_id[solid.id[p]] = static_cast<int>(p);
   }
 };
@@ -144,6 +146,14 @@ class Formulation {
   /// damping in place of the scene's, and (double-point) the water points tied to their soil
   /// points. Called between steps by the time loop.
   virtual void set_initialisation(State<Dim>& s, const scene::Initialisation* phase) = 0;
+  /// Under mpirun (solver/parallel/): what in this scene the formulation cannot yet do on several
+  /// ranks, or empty when it runs there. Asked before anything is written.
+  virtual std::string on_several_ranks(const scene::Scene& /*s*/) const {
+    return "formulation " + name() + " does not run on several ranks yet";
+  }
+  /// Under mpirun: every rank read all the particles; each keeps its share (parallel::Domain).
+  /// Called once by the time loop, before frame 0 of a fresh run.
+  virtual void distribute(State<Dim>& /*s*/) {}
   /// Cells holding at least one particle, at the last step.
   virtual std::size_t active_cells(const State<Dim>& s) const = 0;
   /// Fills the fields a formulation keeps only for output (semi-implicit double-point: the pore

@@ -92,7 +92,8 @@ class ParticleLoads {
       const double scale = e.fn(t);
       if (scale == 0.0) continue;
       for (std::size_t k = 0; k < e.ids.size(); ++k)
-        fn(index_of_id[e.ids[k]], (scale * e.force[k]).eval(), e.offset[k], e.split);
+        if (const int p = index_of_id[e.ids[k]]; p >= 0)  // -1: held by another rank (mpirun)
+          fn(p, (scale * e.force[k]).eval(), e.offset[k], e.split);
     }
   }
   std::size_t count() const { return entries_.size(); }

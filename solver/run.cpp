@@ -36,6 +36,8 @@
 #include "solver/output/checkpoint.hpp"
 #include "solver/output/monitors.hpp"
 #include "solver/output/particle_io.hpp"
+#include "solver/parallel/comm.hpp"
+#include "solver/parallel/domain.hpp"
 #include "solver/shape/shape.hpp"
 #include "swmpm/version.hpp"
 
@@ -224,14 +226,14 @@ struct EnergyGuard {
 
   template <int Dim>
   void start(const Formulation<Dim>& f, const State<Dim>& s, const StepContext& ctx) {
-    stored0 = f.strain_energy(s);
-    energy0 = f.kinetic_energy(s) + stored0;
-    power = f.external_power(s, ctx);
+    stored0 = parallel::sum(f.strain_energy(s));  // sums over the ranks (mpirun)
+    energy0 = parallel::sum(f.kinetic_energy(s)) + stored0;
+    power = parallel::sum(f.external_power(s, ctx));
   }
   /// Trapezoidal rule on the power of external forces over a step of `dt` ending with `end_ctx`.
   template <int Dim>
   void add_work(const Formulation<Dim>& f, const State<Dim>& s, const StepContext& end_ctx, double dt) {
-    const double power_end = f.external_power(s, end_ctx);
+    const double power_end = parallel::sum(f.external_power(s, end_ctx));
     work += 0.5 * dt * (power + power_end);
     power = power_end;
     work_max = std::max(work_max, work);
@@ -239,8 +241,8 @@ struct EnergyGuard {
   /// Empty while the energy is within bounds; else the diagnosis.
   template <int Dim>
   std::string created(const Formulation<Dim>& f, const State<Dim>& s) {
-    const double stored = f.strain_energy(s);
-    const double e = f.kinetic_energy(s) + stored;
+    const double stored = parallel::sum(f.strain_energy(s));
+    const double e = parallel::sum(f.kinetic_energy(s)) + stored;
     released_max = std::max(released_max, stored0 - stored);
     const double allowed = kEnergyFactor * (energy0 + work_max) + released_max + kEnergyFloor;
     if (e <= allowed) return {};
@@ -272,12 +274,18 @@ template <int Dim>
 class Runner {
  public:
   Runner(const std::string& run_dir, const SolveOptions& opt, const FormulationFactory<Dim>& factory)
-      : dir_(run_dir), run_dir_(run_dir), opt_(opt), factory_(factory), log_(opt.quiet) {}
+      : dir_(run_dir), run_dir_(run_dir), opt_(opt), factory_(factory), log_(opt.quiet || parallel::rank() != 0) {}
 
   int run() {
     const auto wall_start = std::chrono::steady_clock::now();
-    load_state();
-    prepare_run_directory();
+    // Under mpirun every rank reads the scene and the particles; rank 0 alone writes the run
+    // directory's files (but for each rank's piece of a frame). A bad input stops every rank
+    // with one message and nothing written (parallel::together).
+    parallel::together([&] { load_state(); });
+    parallel::together([&] {
+      if (root()) prepare_run_directory();
+    });
+    make_monitors();
     log_header();
     std::signal(SIGINT, on_stop_signal);
     std::signal(SIGTERM, on_stop_signal);  // a scheduler's or `kill`'s stop: as an interrupt
@@ -290,7 +298,7 @@ class Runner {
       if (resume_) resume_from_checkpoint();
       else start();
       while (!clock_.ended(state_.time)) {
-        if (g_interrupted) {
+        if (parallel::distributed() ? parallel::any(g_interrupted != 0) : g_interrupted != 0) {
           status_ = "interrupted";
           break;
         }
@@ -298,8 +306,8 @@ class Runner {
         const StepContext ctx{load_clock(state_.time), st.dt, gravity_at(state_.time)};
         try {
           f_->step(state_, ctx);
-          if (!state_.health.ok()) {
-            fail(describe_failure(ctx));
+          if (parallel::distributed() ? parallel::any(!state_.health.ok()) : !state_.health.ok()) {
+            fail(shared_failure(ctx));
             break;
           }
           guard_.add_work(*f_, state_, {load_clock(state_.time + st.dt), st.dt, gravity_at(state_.time + st.dt)}, st.dt);
@@ -378,6 +386,7 @@ class Runner {
                             static_cast<double>(state_.solid.size() + state_.fluid.size()),
                             scene::memory_limit(opt_.max_memory));
     f_ = factory_ ? factory_(scene_, state_) : make_formulation<Dim>(scene_, state_);
+    if (parallel::distributed()) refuse_what_cannot_run_on_several_ranks();
     // The initial state's critical step, once: the interval check, the estimate and the log read it.
     dt_crit0_ = f_->critical_time_step(state_, dt_reason_);
     dt0_ = scene_.time.dt ? *scene_.time.dt : scene_.time.cfl * dt_crit0_;
@@ -466,11 +475,40 @@ class Runner {
     run_dir_.write_text("run.json", running_report(f_->name(), scene::choice_of(scene_)), true);
     run_dir_.claim("monitors.csv");
     std::filesystem::create_directories(dir_ / "output");
+  }
+
+  /// monitors.csv: rank 0 writes it; the other ranks (mpirun) compute their share of each row.
+  void make_monitors() {
     const std::string stamp = "# swmpm " + std::string(version) + " (" + git_hash + "), scene " + scene_.name +
                               ", formulation " + f_->name();
     std::optional<std::size_t> monitor_bytes;
     if (resume_) monitor_bytes = resume_->header.at("loop").at("monitor_bytes").get<std::size_t>();
-    monitors_ = std::make_unique<Monitors<Dim>>(scene_, state_, *f_, dir_ / "monitors.csv", stamp, monitor_bytes);
+    monitors_ = std::make_unique<Monitors<Dim>>(scene_, state_, *f_, root() ? dir_ / "monitors.csv" : fs::path(),
+                                                stamp, monitor_bytes);
+  }
+
+  bool root() const { return parallel::rank() == 0; }
+
+  /// mpirun: a scene whose formulation (or one of its options) does not run on several ranks yet,
+  /// and --resume (a checkpoint holds one rank's particles), are refused before anything is written.
+  void refuse_what_cannot_run_on_several_ranks() const {
+    const std::string file = (dir_ / "scene.json").string();
+    if (std::string why = f_->on_several_ranks(scene_); !why.empty())
+      throw scene::SceneError({file + ": " + why + "; run it without mpirun (" + std::to_string(parallel::ranks()) +
+                               " ranks asked)"});
+    if (opt_.resume)
+      throw CheckpointError((dir_ / "checkpoint.bin").string() +
+                            ": --resume does not run on several ranks yet; resume without mpirun");
+  }
+
+  /// The diagnosis of a failed step: the failing rank's (the lowest one's, mpirun), on every rank.
+  std::string shared_failure(const StepContext& ctx) const {
+    std::string mine = state_.health.ok() ? std::string() : describe_failure(ctx);
+    if (!parallel::distributed()) return mine;
+    std::string first;
+    for (const auto& bytes : parallel::gather_to_root(std::vector<char>(mine.begin(), mine.end())))
+      if (first.empty() && !bytes.empty()) first.assign(bytes.begin(), bytes.end());
+    return parallel::broadcast(first);
   }
 
   /// The run's first lines in the log: what runs, what each monitor follows, the dt.
@@ -502,6 +540,7 @@ class Runner {
   /// A fresh run: the initialisation phase (if any) starts, frame 0 and the first monitor row, the
   /// energy check's initial state, the first snapshot.
   void start() {
+    f_->distribute(state_);  // mpirun: each rank keeps its share of the particles
     state_.time = clock_.t_start;
     begin_initialisation();
     take_snapshot(last_good_);  // the initial state is the first good one
@@ -551,8 +590,9 @@ class Runner {
       state_.fluid.x0 = state_.fluid.x;
     }
     std::ostringstream os;
-    os << "initialisation done after " << state_.step << " steps: kinetic energy " << f_->kinetic_energy(state_)
-       << " J, stored " << f_->strain_energy(state_) << " J; the analysis starts at t = 0"
+    const double kinetic = parallel::sum(f_->kinetic_energy(state_)), stored = parallel::sum(f_->strain_energy(state_));
+    os << "initialisation done after " << state_.step << " steps: kinetic energy " << kinetic
+       << " J, stored " << stored << " J; the analysis starts at t = 0"
        << (init.reset_displacement ? " (displacements measured from here)" : "");
     log_.line(os.str());
     return true;
@@ -681,21 +721,44 @@ class Runner {
       frames_.push_back({t, group, part, name});
       return (dir_ / "output" / name).string();
     };
+    // mpirun: a frame's set is a .pvtu over one piece per rank; rank 0 lists it.
+    const int R = parallel::ranks();
+    auto pieces = [&](const char* group, int part) {
+      char name[64];
+      std::snprintf(name, sizeof name, "%s_%06d.pvtu", group, k);
+      if (root()) {
+        run_dir_.claim(std::string("output/") + name);
+        for (int r = 0; r < R; ++r) run_dir_.claim("output/" + scene::pvtu_piece_name(name, r));
+      }
+      frames_.push_back({t, group, part, name});
+      return (dir_ / "output" / name).string();
+    };
+    const bool fluid_set = parallel::distributed() ? parallel::max(static_cast<long>(state_.fluid.size())) > 0
+                                                   : state_.fluid.size() > 0;
     try {
       scene::PointCloud solid = particles_to_cloud(state_.solid);
       add_material_reports(solid, state_.solid, reporters_);
       scene::PointCloud fluid;
-      if (state_.fluid.size()) fluid = water_points_to_cloud(state_.fluid);
+      if (fluid_set) fluid = water_points_to_cloud(state_.fluid);
       fluid.points.resize(state_.fluid.size());
       f_->add_point_fields(state_, solid, fluid);
-      scene::write_vtu(file("solid", 0), solid, compression_);
-      if (state_.fluid.size()) scene::write_vtu(file("fluid", 1), fluid, compression_);
+      if (parallel::distributed()) {
+        parallel::barrier();  // rank 0 has claimed the pieces' names
+        scene::write_pvtu_piece(pieces("solid", 0), solid, parallel::rank(), R, compression_);
+        if (fluid_set) scene::write_pvtu_piece(pieces("fluid", 1), fluid, parallel::rank(), R, compression_);
+        parallel::barrier();  // every piece is complete before results.pvd lists the frame
+      } else {
+        scene::write_vtu(file("solid", 0), solid, compression_);
+        if (fluid_set) scene::write_vtu(file("fluid", 1), fluid, compression_);
+      }
       if (grid) {
         nodes = f_->grid_fields(state_);
         if (!nodes.empty()) scene::write_lattice_vtu(file("grid", 2), nodes.cloud, nodes.nodes, compression_);
       }
-      run_dir_.claim("output/results.pvd");
-      scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);
+      if (root()) {
+        run_dir_.claim("output/results.pvd");
+        scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);
+      }
     } catch (...) {
       frames_.resize(listed);
       throw;
@@ -709,9 +772,23 @@ class Runner {
   /// history run.json gets. Timed apart from the frame's files (run.json stability.seconds).
   void record_stability(const GridFields& nodes) {
     const auto start = std::chrono::steady_clock::now();
-    const diagnostics::Energies e{f_->kinetic_energy(state_), f_->strain_energy(state_), guard_.energy0, guard_.work};
-    const diagnostics::FrameIndicators fi = diagnostics::measure<Dim>(
-        state_, nodes.empty() ? nullptr : &nodes, e, gravity_at(state_.time), state_.time - clock_.t_start);
+    const diagnostics::Energies e{parallel::sum(f_->kinetic_energy(state_)), parallel::sum(f_->strain_energy(state_)),
+                                  guard_.energy0, guard_.work};
+    diagnostics::FrameIndicators fi;
+    if (parallel::distributed()) {
+      // mpirun: rank 0 measures the whole sets, gathered in the one-rank run's order.
+      State<Dim> whole;
+      whole.solid = parallel::gather_set(state_.solid);
+      whole.fluid = parallel::gather_set(state_.fluid);
+      whole.time = state_.time;
+      whole.step = state_.step;
+      if (!root()) return;
+      fi = diagnostics::measure<Dim>(whole, nodes.empty() ? nullptr : &nodes, e, gravity_at(state_.time),
+                                     state_.time - clock_.t_start);
+    } else {
+      fi = diagnostics::measure<Dim>(state_, nodes.empty() ? nullptr : &nodes, e, gravity_at(state_.time),
+                                     state_.time - clock_.t_start);
+    }
     const std::vector<std::string> warnings = stability_.add(fi);
     stability_.add_seconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     log_.file_line(diagnostics::StabilityReport::frame_line(fi));
@@ -743,6 +820,11 @@ class Runner {
 
   /// RUN_DIR/checkpoint.bin (solver/output/checkpoint.hpp), replaced atomically.
   void write_checkpoint() {
+    if (parallel::distributed()) {  // a checkpoint holds one rank's particles: not yet under mpirun
+      if (!checkpoint_skipped_) log_.line("restart checkpoints are not written on several ranks yet (mpirun)");
+      checkpoint_skipped_ = true;
+      return;
+    }
     const auto start = std::chrono::steady_clock::now();
     Checkpoint c;
     take_snapshot(c);
@@ -941,8 +1023,17 @@ class Runner {
     // Points of both sets count (double-point: soil and water points, as the paper counts them).
     // A resumed run counts the steps it made itself.
     const long steps_here = state_.step - first_step_;
-    const double particle_steps =
-        static_cast<double>(state_.solid.size() + state_.fluid.size()) * static_cast<double>(steps_here);
+    // mpirun: the run's particles over all ranks; each rank's count and communication time.
+    const long solid_n = parallel::sum(static_cast<long>(state_.solid.size()));
+    const long fluid_n = parallel::sum(static_cast<long>(state_.fluid.size()));
+    const std::vector<long> per_rank = parallel::all_gather(static_cast<long>(state_.solid.size() + state_.fluid.size()));
+    const double comm_seconds = parallel::communication_seconds();
+    const double comm_max = parallel::max(comm_seconds), comm_sum = parallel::sum(comm_seconds);
+    const long active_cells = parallel::sum(static_cast<long>(f_->active_cells(state_)));
+    const long peak_memory = parallel::sum(static_cast<long>(peak_memory_bytes()));
+    const long particle_bytes = parallel::sum(static_cast<long>(state_.solid.size() * state_.solid.bytes_per_particle() +
+                                                                state_.fluid.size() * state_.fluid.bytes_per_particle()));
+    const double particle_steps = static_cast<double>(solid_n + fluid_n) * static_cast<double>(steps_here);
     const double us_pps = steps_here > 0 && particle_steps > 0 ? 1e6 * wall / particle_steps : 0.0;
     const double loop_us_pps = steps_here > 0 && particle_steps > 0 ? 1e6 * loop_wall / particle_steps : 0.0;
     // A fluid on the grid (mpm-fem) costs per node: wall us / (grid nodes x steps) as well.
@@ -962,9 +1053,18 @@ class Runner {
     rj["formulation_choice"] = scene::choice_of(scene_);
     rj["dimension"] = Dim;
     rj["shape_function"] = scene::to_string(scene_.grid.shape_function);
-    rj["particles"] = {{"solid", state_.solid.size()}};
-    if (state_.fluid.size()) rj["particles"]["fluid"] = state_.fluid.size();
-    rj["active_cells"] = f_->active_cells(state_);
+    rj["particles"] = {{"solid", solid_n}};
+    if (fluid_n) rj["particles"]["fluid"] = fluid_n;
+    rj["active_cells"] = active_cells;
+    rj["ranks"] = parallel::ranks();
+    if (parallel::distributed()) {
+      // interface.md §4 (mpirun): the particles per rank at the end, and the wall time each rank
+      // spent communicating (collectives, the exchange of shared node columns, migration).
+      rj["particles_per_rank"] = {{"min", *std::min_element(per_rank.begin(), per_rank.end())},
+                                  {"max", *std::max_element(per_rank.begin(), per_rank.end())},
+                                  {"each", per_rank}};
+      rj["communication_seconds"] = {{"max", comm_max}, {"mean", comm_sum / parallel::ranks()}};
+    }
     rj["steps"] = state_.step;
     if (resume_) {
       rj["resumed_from_step"] = first_step_;
@@ -990,9 +1090,8 @@ class Runner {
       rj["fluid_nodes"] = f_->fluid_nodes();
       rj["loop_us_per_fluid_node_step"] = us_pns;
     }
-    rj["peak_memory_bytes"] = peak_memory_bytes();
-    rj["particle_bytes"] = state_.solid.size() * state_.solid.bytes_per_particle() +
-                           state_.fluid.size() * state_.fluid.bytes_per_particle();
+    rj["peak_memory_bytes"] = peak_memory;  // summed over the ranks
+    rj["particle_bytes"] = particle_bytes;
     rj["frames"] = frames;
     if (status_ == "diverged") rj["last_good_frame_time"] = last_good_frame_time_;
     Json stages;
@@ -1008,6 +1107,8 @@ class Runner {
     rj["stability"] = stability_.json();
     rj["software_version"] = version;
     rj["git_hash"] = git_hash;
+    const int exit_code = status_ == "completed" ? 0 : status_ == "diverged" ? 3 : status_ == "interrupted" ? 4 : 5;
+    if (!root()) return exit_code;
     write_run_report(rj.dump(2) + "\n");
 
     try {
@@ -1016,7 +1117,13 @@ class Runner {
               << " s wall (" << fmt(us_pps, 4) << " us per particle-step, " << fmt(loop_us_pps, 4)
               << " in the time loop";
       if (f_->fluid_nodes() > 0) summary << "; " << fmt(us_pns, 4) << " us per fluid node-step in the time loop";
-      summary << ", " << threads_ << " threads)";
+      summary << ", " << threads_ << " threads";
+      if (parallel::distributed())
+        summary << " on each of " << parallel::ranks() << " ranks; " << solid_n + fluid_n << " particles, "
+                << *std::min_element(per_rank.begin(), per_rank.end()) << " to "
+                << *std::max_element(per_rank.begin(), per_rank.end()) << " per rank; communication "
+                << fmt(comm_max, 3) << " s on the busiest rank";
+      summary << ")";
       log_.line(summary.str());
       std::ostringstream split;
       double total = 0.0;
@@ -1095,6 +1202,7 @@ class Runner {
   double frame_seconds_ = 0.0;      // wall time spent writing frames (part of loop_seconds)
   double checkpoint_seconds_ = 0.0;  // wall time spent writing restart checkpoints (part of loop_seconds)
   int checkpoints_ = 0;
+  bool checkpoint_skipped_ = false;
   double last_good_frame_time_ = 0.0;
 };
 

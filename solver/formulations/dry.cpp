@@ -18,6 +18,7 @@
 #include "solver/formulations/registry.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/parallel/particles.hpp"
 #include "solver/transfer/fbar.hpp"
 #include "solver/transfer/transfer.hpp"
 
@@ -54,9 +55,12 @@ class Dry final : public Formulation<Dim> {
 
     // (0) every reorder_interval steps, store the particles in last step's schedule order, so the
     //     transfers below walk particle memory sequentially (results stay thread-independent).
-    if (reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval)) lap("reorder");
+    if (reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval, &domain_)) lap("reorder");
     long bad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);                       // (1)
+    // Under mpirun: particles that crossed a cut move to their rank; the rank's node box.
+    if (parallel::own_particles<Shape>(domain_, grid_, st, schedule_, sd_, box_, bad))
+      regroup_by_material(ps, material_particles_);
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
     // Tractions act at the particles' face points (ParticleLoads).
     collect_face_forces<Shape>(grid_, loads_, ps, st.index_of_id, ctx.t, box_, face_forces_);
@@ -94,18 +98,25 @@ class Dry final : public Formulation<Dim> {
 
   double critical_time_step(const State<Dim>& st, std::string& reason) const override {
     // CFL: dt = h / (c_p + |v|max), c_p = sqrt(M / rho) the P-wave speed of each material.
+    // Per material the largest modulus and the smallest density, over all ranks.
     const ParticleSet<Dim>& ps = st.solid;
-    double c_max = 0.0;
-    for (std::size_t k = 0; k < materials_.size(); ++k) {
+    const std::size_t K = materials_.size();
+    std::vector<double> rho_min(K, std::numeric_limits<double>::max()), modulus(K, 0.0);
+    for (std::size_t k = 0; k < K; ++k) {
       if (material_particles_[k].empty()) continue;
-      double rho_min = std::numeric_limits<double>::max();
-      for (int p : material_particles_[k]) rho_min = std::min(rho_min, ps.m[p] / ps.V[p]);
-      c_max = std::max(c_max, std::sqrt(materials_[k]->max_p_wave_modulus(ps, material_particles_[k]) / rho_min));
+      for (int p : material_particles_[k]) rho_min[k] = std::min(rho_min[k], ps.m[p] / ps.V[p]);
+      modulus[k] = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
     }
+    parallel::min(std::span<double>(rho_min));
+    parallel::max(std::span<double>(modulus));
+    double c_max = 0.0;
+    for (std::size_t k = 0; k < K; ++k)
+      if (rho_min[k] < std::numeric_limits<double>::max()) c_max = std::max(c_max, std::sqrt(modulus[k] / rho_min[k]));
     double v_max = 0.0;
     const long n = static_cast<long>(ps.size());
 #pragma omp parallel for reduction(max : v_max) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) v_max = std::max(v_max, ps.v[p].norm());
+    v_max = parallel::max(v_max);
     std::ostringstream os;
     os << "P-wave CFL (c = " << c_max << " m/s, |v|max = " << v_max << " m/s)";
     reason = os.str();
@@ -133,6 +144,20 @@ class Dry final : public Formulation<Dim> {
     damping_ = phase_damping(phase, scene_damping_);
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
+  std::string on_several_ranks(const scene::Scene& s) const override {
+    if (s.solver.stabilisation.fbar != "none") return "solver.stabilisation.fbar does not run on several ranks yet";
+    if (loads_.count() > 0) return "loads on particles do not run on several ranks yet";
+    return {};
+  }
+  std::vector<typename Formulation<Dim>::Counter> counters() const override {
+    std::vector<typename Formulation<Dim>::Counter> c;
+    domain_.add_counters(c);
+    return c;
+  }
+  void distribute(State<Dim>& st) override {
+    parallel::distribute<Shape>(domain_, grid_, st, schedule_);
+    regroup_by_material(st.solid, material_particles_);
+  }
   // Restart: the last step's schedule order, which the next step's reordering (0) reads; every
   // other field is rebuilt by each step from the particles.
   void save(Checkpoint& c) const override { save_order(c, "formulation/schedule_order", schedule_); }
@@ -176,6 +201,7 @@ class Dry final : public Formulation<Dim> {
   std::vector<shape::ShapeData<Dim, S>> sd_;
   StripeSchedule schedule_;
   Reorder<Dim> reorder_;
+  parallel::Domain<Dim> domain_;  // mpirun: this rank's stripes (inactive at one rank)
   std::vector<FaceForce<Dim, S>> face_forces_;
   FBar<Dim, S> fbar_;
   static constexpr long reorder_interval = 10;  // steps

@@ -11,6 +11,7 @@
 #include "solver/formulation.hpp"
 #include "solver/grid/grid.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/parallel/domain.hpp"
 #include "solver/shape/shape.hpp"
 #include "solver/transfer/schedule.hpp"
 
@@ -66,10 +67,24 @@ std::vector<std::vector<int>> group_by_material(const ParticleSet<Dim>& ps, std:
 
 /// Stores the particles in the schedule's order every `interval` steps (memory locality for the
 /// transfers; results stay thread-independent) and refreshes what indexes them. True if it did.
+/// Under mpirun (`domain` active) every rank takes the same steps, and the keys follow the new
+/// order (parallel::Domain::renumber), as the one-rank run's storage order does.
 template <int Dim>
 bool reorder_for_locality(State<Dim>& st, const StripeSchedule& schedule, Reorder<Dim>& reorder,
-                          std::vector<std::vector<int>>& material_particles, long interval) {
+                          std::vector<std::vector<int>>& material_particles, long interval,
+                          parallel::Domain<Dim>* domain = nullptr) {
   ParticleSet<Dim>& ps = st.solid;
+  if (domain && domain->active()) {
+    if (st.step % interval != 0 || !schedule.built()) return false;
+    const bool moved = !schedule.in_order();
+    if (moved) {
+      reorder.apply(ps, schedule.order());
+      st.index_ids();
+      regroup_by_material(ps, material_particles);
+    }
+    domain->renumber(ps);
+    return moved;
+  }
   if (st.step % interval != 0 || schedule.order().size() != ps.size() || schedule.in_order()) return false;
   reorder.apply(ps, schedule.order());
   st.index_ids();

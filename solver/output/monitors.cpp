@@ -1,5 +1,7 @@
 #include "solver/output/monitors.hpp"
 
+#include "solver/parallel/comm.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -135,7 +137,9 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const Formu
       header << "," << mon.name << "." << qn;
     }
   }
-  if (resume_bytes) {
+  if (path.empty()) {
+    // Another rank than 0 under mpirun: it computes its share of each row; rank 0 writes the file.
+  } else if (resume_bytes) {
     out_ = files::CheckedFile(path, *resume_bytes);  // the rows up to the checkpoint, then this run's
   } else {
     out_ = files::CheckedFile(path);
@@ -147,32 +151,38 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const Formu
 template <int Dim>
 void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, double external_work) {
   const auto& ps = st.solid;
-  row_.str("");
-  row_ << st.time;
+  // Each column's value on this rank. Under mpirun a followed particle lives on one rank (the
+  // others add 0), energies are this rank's share, water levels this rank's highest point: the
+  // sums and maxima over the ranks are the row.
+  values_.assign(columns_.size(), 0.0);
+  highest_.assign(columns_.size(), -std::numeric_limits<double>::infinity());
   double ke = -1.0, se = -1.0;
-  for (const Column& c : columns_) {
-    double val = 0.0;
+  for (std::size_t col = 0; col < columns_.size(); ++col) {
+    const Column& c = columns_[col];
+    double& val = values_[col];
     if (c.q == Q::level) {
       const Gauge& g = gauges_[static_cast<std::size_t>(c.comp)];
-      row_ << "," << (g.grid ? f.grid_water_level(g.x, g.z) : water_level(st.fluid, g));
+      if (g.grid) val = parallel::rank() == 0 ? f.grid_water_level(g.x, g.z) : 0.0;
+      else if (const double top = water_level(st.fluid, g); std::isfinite(top)) highest_[col] = top;
+      else if (!parallel::distributed()) highest_[col] = top;  // NaN: no liquid point near the line
       continue;
     }
     if (c.q == Q::probe) {  // the grid's fluid at a fixed point (the last completed step's nodes)
-      row_ << "," << f.grid_value(probes_[static_cast<std::size_t>(c.comp)], c.grid);
+      val = parallel::rank() == 0 ? f.grid_value(probes_[static_cast<std::size_t>(c.comp)], c.grid) : 0.0;
       continue;
     }
     if (c.water) {  // a water point: its own position, velocity, pore pressure and porosity
       const auto& ws = st.fluid;
       const int p = water_index(ws, c.particle);
-      if (p < 0) val = std::numeric_limits<double>::quiet_NaN();  // it left the run (solver.escaped_water)
+      if (p < 0) val = parallel::distributed() ? 0.0 : std::numeric_limits<double>::quiet_NaN();  // it left the run (solver.escaped_water)
       else if (c.q == Q::disp) val = ws.x[p][c.comp] - ws.x0[p][c.comp];
       else if (c.q == Q::vel) val = ws.v[p][c.comp];
       else if (c.q == Q::pore) val = ws.p[p];
       else val = ws.n[p];
-      row_ << "," << val;
       continue;
     }
     const int p = c.particle < 0 ? -1 : st.index_of_id[c.particle];
+    if (p < 0 && c.q < Q::kinetic) continue;  // held by another rank
     switch (c.q) {
       case Q::disp: val = ps.x[p][c.comp] - ps.x0[p][c.comp]; break;
       case Q::vel: val = ps.v[p][c.comp]; break;
@@ -190,11 +200,21 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
         se = se < 0 ? f.strain_energy(st) : se;
         val = ke + se;
         break;
-      case Q::work: val = external_work; break;
+      case Q::work: val = parallel::rank() == 0 ? external_work : 0.0; break;
       case Q::level:
       case Q::probe: break;  // above
     }
-    row_ << "," << val;
+  }
+  parallel::sum(std::span<double>(values_));
+  parallel::max(std::span<double>(highest_));
+  if (parallel::rank() != 0) return;
+  row_.str("");
+  row_ << st.time;
+  for (std::size_t col = 0; col < columns_.size(); ++col) {
+    const Column& c = columns_[col];
+    const bool point_level = c.q == Q::level && !gauges_[static_cast<std::size_t>(c.comp)].grid;
+    if (!point_level) row_ << "," << values_[col];
+    else row_ << "," << (std::isinf(highest_[col]) ? std::numeric_limits<double>::quiet_NaN() : highest_[col]);
   }
   row_ << "\n";
   out_.write(row_.str());  // checked: a failed write throws files::WriteError

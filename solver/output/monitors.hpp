@@ -106,6 +106,7 @@ class Monitors {
   std::vector<std::pair<std::int64_t, int>> water_found_;  // water point id -> index last found
   std::vector<Column> columns_;
   files::CheckedFile out_;
+  std::vector<double> values_, highest_;  // a row's values on this rank (record)
   std::ostringstream row_;  // one row, formatted before it is written
 };
 

@@ -56,6 +56,10 @@ struct ParticleSet {
   // for_each_field (nothing reads it across steps, so reordering and snapshots skip it).
   std::vector<double> ev_shift;
 
+  // Under mpirun only (solver/parallel/domain.hpp): the point's place in the one-rank run's
+  // storage order, which fixes the order of every sum a rank makes (empty at one rank).
+  std::vector<std::int64_t> key;
+
   std::size_t size() const { return x.size(); }
   bool two_phase() const { return carries_fluid_; }
   bool has_material_state() const { return carries_state_; }
@@ -118,7 +122,7 @@ struct ParticleSet {
   template <class Fn>
   void for_each_field(Fn&& f) {
     f(id), f(x), f(x0), f(v), f(l), f(m), f(V), f(V0), f(F), f(L), f(sigma), f(eps_p), f(material), f(body),
-        f(faces), f(n), f(p), f(m_f), f(v_f), f(fluid_material), f(state);
+        f(faces), f(n), f(p), f(m_f), f(v_f), f(fluid_material), f(state), f(key);
   }
   /// Bytes held per particle by this set (for run.json and the memory benchmark): the fields every
   /// set has, plus the pore-fluid and model-state fields when allocated.
@@ -139,6 +143,7 @@ struct ParticleSet {
     eps_p = o.eps_p, material = o.material, body = o.body, faces = o.faces;
     n = o.n, p = o.p, m_f = o.m_f, v_f = o.v_f, fluid_material = o.fluid_material;
     state = o.state;
+    key = o.key;
     carries_fluid_ = o.carries_fluid_;
     carries_state_ = o.carries_state_;
     water_points_ = o.water_points_;

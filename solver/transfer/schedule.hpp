@@ -11,11 +11,24 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <vector>
 
 #include "solver/common.hpp"
 
 namespace swmpm {
+
+/// Under mpirun (solver/parallel/domain.hpp): the ranks own whole stripes, so a node column near a
+/// cut between ranks gets the contributions of two stripes on two ranks, one of each colour. After
+/// colour 0 the rank that ran the colour-0 stripe hands its partial sums of those columns to the
+/// other one (which has none yet), and after colour 1 the finished sums go back: every node then
+/// holds the one-rank sum, bit for bit, on both ranks. `nodes` is a node array (any element of
+/// `bytes` bytes, a whole number of doubles) indexed by the grid's flat node index.
+class NodeExchange {
+ public:
+  virtual ~NodeExchange() = default;
+  virtual void after_colour(int colour, void* nodes, std::size_t bytes) const = 0;
+};
 
 class StripeSchedule {
  public:
@@ -26,6 +39,7 @@ class StripeSchedule {
   template <class BaseOf>
   void build(std::size_t n, int nodes_on_axis, int width, BaseOf&& base_of) {
     width_ = width;
+    built_ = true;
     stripes_ = (nodes_on_axis + width - 1) / width;
     key_.resize(n);
     order_.resize(n);
@@ -64,7 +78,12 @@ class StripeSchedule {
   const std::vector<int>& order() const { return order_; }
   /// Restart: the order of the step before a checkpoint, which the next step's reordering reads
   /// (the stripes themselves are rebuilt by every step before they are used).
-  void restore_order(std::vector<int> order) { order_ = std::move(order); }
+  void restore_order(std::vector<int> order) {
+    order_ = std::move(order);
+    built_ = true;
+  }
+  /// Whether build() has run (the first step has).
+  bool built() const { return built_; }
   /// Whether the particles are already stored in schedule order.
   bool in_order() const {
     for (std::size_t k = 0; k < order_.size(); ++k)
@@ -72,17 +91,27 @@ class StripeSchedule {
     return true;
   }
 
-  /// Calls fn(p) for every particle: two colours, stripes of one colour in parallel.
-  template <class Fn>
-  void run(Fn&& fn) const {
+  /// Calls fn(p) for every particle: two colours, stripes of one colour in parallel. `scattered`:
+  /// the node arrays fn adds to, which a rank shares with its neighbours after each colour
+  /// (NodeExchange; nothing at one rank).
+  template <class Fn, class... NodeArrays>
+  void run(Fn&& fn, NodeArrays&... scattered) const {
+    if constexpr (sizeof...(NodeArrays) == 0)
+      if (exchange_) throw std::logic_error("a scatter that does not name its node arrays ran on several ranks");
     for (int colour = 0; colour < 2; ++colour) {
 #pragma omp parallel for schedule(dynamic, 1) if (static_cast<long>(order_.size()) > parallel_threshold)
       for (int s = colour; s < stripes_; s += 2)
         for (int k = start_[s]; k < start_[s + 1]; ++k) fn(order_[k]);
+      if (exchange_) (exchange_->after_colour(colour, scattered.data(), sizeof(scattered[0])), ...);
     }
   }
+  /// The ranks' exchange of scattered node columns (nullptr: one rank).
+  void set_exchange(const NodeExchange* exchange) { exchange_ = exchange; }
+  const NodeExchange* exchange() const { return exchange_; }
 
  private:
+  const NodeExchange* exchange_ = nullptr;
+  bool built_ = false;
   int width_ = 1, stripes_ = 0;
   std::vector<int> start_, key_, order_;
   std::vector<int> counts_;  // per chunk and stripe: counts, then first slots

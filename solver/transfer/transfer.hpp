@@ -196,7 +196,7 @@ void scatter_mass_momentum_force(const Grid<Dim>& g, const StripeSchedule& sched
         nd.f += wx * f_w + dwx * f_dw;
       }
     });
-  });
+  }, nf.acc);
 }
 
 /// G2P and MUSL remap in one pass over the particles (Sulsky et al. 1995):
@@ -230,7 +230,7 @@ void gather_velocity_position_remap(const Grid<Dim>& g, const StripeSchedule& sc
       const Vec<Dim> mv_r = w_r * mv_p;
       for (int a = 0; a < S; ++a) nf.acc[row + a].mv += sp.w[0][a] * mv_r;
     });
-  });
+  }, nf.acc);
   g.for_each_node(box, [&](std::size_t i, const auto&) {
     const auto& a = nf.acc[i];
     nf.v[i] = a.m > empty_node_mass ? Vec<Dim>(a.mv / a.m) : Vec<Dim>::Zero();

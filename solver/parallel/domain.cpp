@@ -1,0 +1,248 @@
+#include "solver/parallel/domain.hpp"
+
+#include <petscdmda.h>
+#include <petscsf.h>
+
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+namespace swmpm::parallel {
+
+namespace {
+/// A PETSc call that failed (PETSc has printed its trace): an exception naming the code.
+void petsc(PetscErrorCode code) {
+  if (code != 0) throw std::runtime_error("PETSc error " + std::to_string(static_cast<int>(code)) + " (see above)");
+}
+}  // namespace
+
+// ---- the exchange of shared columns ------------------------------------------------------------
+
+struct StripeExchange::Impl {
+  // Cuts at odd stripes (the lower rank's stripe is colour 0): the lower rank (leaf) finishes its
+  // colour first. Cuts at even stripes: the upper rank (root) does.
+  PetscSF leaf_first = nullptr, root_first = nullptr;
+  // The grid's nodes over the ranks as PETSc holds them (DMDA): rank r owns the node columns of its
+  // stripes along the stripe axis and every node across it. The distributed solves build their
+  // vectors and matrices on it.
+  DM da = nullptr;
+  mutable std::map<std::size_t, MPI_Datatype> types;  // a node's bytes as doubles
+
+  MPI_Datatype type(std::size_t bytes) const {
+    auto it = types.find(bytes);
+    if (it != types.end()) return it->second;
+    MPI_Datatype t;
+    MPI_Type_contiguous(static_cast<int>(bytes / sizeof(double)), MPI_DOUBLE, &t);
+    MPI_Type_commit(&t);
+    return types.emplace(bytes, t).first->second;
+  }
+  ~Impl() {
+    DMDestroy(&da);
+    PetscSFDestroy(&leaf_first);
+    PetscSFDestroy(&root_first);
+    for (auto& [b, t] : types) MPI_Type_free(&t);
+  }
+};
+
+StripeExchange::StripeExchange(const std::array<int, 3>& nodes, int axis, int width, int support,
+                               const std::vector<int>& cuts)
+    : impl_(std::make_unique<Impl>()) {
+  const int me = rank(), R = ranks();
+  const PetscInt n_all = static_cast<PetscInt>(static_cast<std::size_t>(nodes[0]) * nodes[1] * nodes[2]);
+  std::vector<PetscInt> leaves;
+  std::vector<PetscSFNode> roots;
+  bool odd = false;
+  if (me + 1 < R) {
+    // The shared columns at my upper cut: my ghosts (leaves), the next rank's nodes (roots).
+    const int s = cuts[static_cast<std::size_t>(me) + 1];
+    odd = s % 2 == 1;
+    const int first = s * width, last = std::min(nodes[axis] - 1, s * width + support - 2);
+    std::array<int, 3> ijk{0, 0, 0}, lo{0, 0, 0}, hi{nodes[0] - 1, nodes[1] - 1, nodes[2] - 1};
+    lo[axis] = first, hi[axis] = last;
+    for (ijk[2] = lo[2]; ijk[2] <= hi[2]; ++ijk[2])
+      for (ijk[1] = lo[1]; ijk[1] <= hi[1]; ++ijk[1])
+        for (ijk[0] = lo[0]; ijk[0] <= hi[0]; ++ijk[0]) {
+          const PetscInt i = ijk[0] + nodes[0] * (ijk[1] + static_cast<PetscInt>(nodes[1]) * ijk[2]);
+          leaves.push_back(i);
+          roots.push_back({me + 1, i});
+        }
+  }
+  auto make = [&](PetscSF& sf, bool mine) {
+    petsc(PetscSFCreate(PETSC_COMM_WORLD, &sf));
+    const PetscInt n = mine ? static_cast<PetscInt>(leaves.size()) : 0;
+    petsc(PetscSFSetGraph(sf, n_all, n, mine ? leaves.data() : nullptr, PETSC_COPY_VALUES,
+                          mine ? roots.data() : nullptr, PETSC_COPY_VALUES));
+    petsc(PetscSFSetUp(sf));
+  };
+  make(impl_->leaf_first, odd);
+  make(impl_->root_first, !odd && me + 1 < R);
+
+  // The DMDA of the same partition: ownership ranges along the axis from the cuts, one rank
+  // across the other axes, ghost width S - 1 (the shared columns).
+  std::vector<PetscInt> along(static_cast<std::size_t>(R));
+  for (int r = 0; r < R; ++r)
+    along[static_cast<std::size_t>(r)] =
+        (r + 1 < R ? cuts[static_cast<std::size_t>(r) + 1] * width : nodes[axis]) - cuts[static_cast<std::size_t>(r)] * width;
+  std::array<PetscInt, 3> procs{1, 1, 1};
+  procs[static_cast<std::size_t>(axis)] = R;
+  std::array<const PetscInt*, 3> ranges{nullptr, nullptr, nullptr};
+  ranges[static_cast<std::size_t>(axis)] = along.data();
+  const std::array<PetscInt, 3> whole{nodes[0], nodes[1], nodes[2]};
+  for (int a = 0; a < 3; ++a)
+    if (a != axis) ranges[static_cast<std::size_t>(a)] = &whole[static_cast<std::size_t>(a)];
+  const PetscInt ghost = std::max(1, support - 1);
+  if (nodes[2] > 1)
+    petsc(DMDACreate3d(PETSC_COMM_WORLD, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DMDA_STENCIL_BOX, nodes[0],
+                 nodes[1], nodes[2], procs[0], procs[1], procs[2], 1, ghost, ranges[0], ranges[1], ranges[2], &impl_->da));
+  else
+    petsc(DMDACreate2d(PETSC_COMM_WORLD, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DMDA_STENCIL_BOX, nodes[0], nodes[1], procs[0],
+                 procs[1], 1, ghost, ranges[0], ranges[1], &impl_->da));
+  petsc(DMSetUp(impl_->da));
+  PetscInt start[3] = {0, 0, 0}, count[3] = {1, 1, 1};
+  DMDAGetCorners(impl_->da, &start[0], &start[1], &start[2], &count[0], &count[1], &count[2]);
+  if (start[axis] != cuts[static_cast<std::size_t>(me)] * width || count[axis] != along[static_cast<std::size_t>(me)])
+    throw std::logic_error("the DMDA's ownership does not follow the stripes");
+  owned_.first = static_cast<int>(start[axis]);
+  owned_.second = static_cast<int>(start[axis] + count[axis]);
+}
+
+StripeExchange::~StripeExchange() = default;
+
+void StripeExchange::after_colour(int colour, void* nodes, std::size_t bytes) const {
+  const double t0 = MPI_Wtime();
+  const MPI_Datatype t = impl_->type(bytes);
+  if (colour == 0) {
+    // Partial sums to the rank that adds the second colour: leaf -> root, root -> leaf.
+    PetscSFReduceBegin(impl_->leaf_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFBcastBegin(impl_->root_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFReduceEnd(impl_->leaf_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFBcastEnd(impl_->root_first, t, nodes, nodes, MPI_REPLACE);
+  } else {
+    // Finished sums back to the rank that ran the first colour.
+    PetscSFBcastBegin(impl_->leaf_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFReduceBegin(impl_->root_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFBcastEnd(impl_->leaf_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFReduceEnd(impl_->root_first, t, nodes, nodes, MPI_REPLACE);
+  }
+  add_communication_seconds(MPI_Wtime() - t0);
+}
+
+// ---- particle migration --------------------------------------------------------------------------
+
+template <int Dim>
+bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout, Reorder<Dim>& reorder) {
+  const double t0 = MPI_Wtime();
+  const int R = ranks(), me = rank();
+  const std::size_t n = ps.size();
+  std::vector<int> send_n(static_cast<std::size_t>(R), 0), recv_n(static_cast<std::size_t>(R), 0);
+  for (std::size_t p = 0; p < n; ++p)
+    if (dest[p] != me) ++send_n[static_cast<std::size_t>(dest[p])];
+  MPI_Alltoall(send_n.data(), 1, MPI_INT, recv_n.data(), 1, MPI_INT, PETSC_COMM_WORLD);
+  const long sent = std::accumulate(send_n.begin(), send_n.end(), 0L);
+  const long received = std::accumulate(recv_n.begin(), recv_n.end(), 0L);
+
+  // Bytes of one particle: the fields the set carries.
+  std::size_t record = 0;
+  {
+    std::size_t k = 0;
+    ps.for_each_field([&](auto& f) {
+      if (layout.active[k++]) record += sizeof(f[0]);
+    });
+  }
+  // Leaving particles grouped by destination (increasing index inside a group), field by field.
+  std::vector<int> send_at(static_cast<std::size_t>(R) + 1, 0);
+  for (int r = 0; r < R; ++r) send_at[static_cast<std::size_t>(r) + 1] = send_at[static_cast<std::size_t>(r)] + send_n[static_cast<std::size_t>(r)];
+  std::vector<int> leaving(static_cast<std::size_t>(sent)), keep;
+  {
+    std::vector<int> fill(send_at.begin(), send_at.end() - 1);
+    keep.reserve(n - static_cast<std::size_t>(sent));
+    for (std::size_t p = 0; p < n; ++p) {
+      if (dest[p] == me) keep.push_back(static_cast<int>(p));
+      else leaving[static_cast<std::size_t>(fill[static_cast<std::size_t>(dest[p])]++)] = static_cast<int>(p);
+    }
+  }
+  std::vector<int> send_bytes(static_cast<std::size_t>(R)), send_displ(static_cast<std::size_t>(R)),
+      recv_bytes(static_cast<std::size_t>(R)), recv_displ(static_cast<std::size_t>(R));
+  int total_send = 0, total_recv = 0;
+  for (int r = 0; r < R; ++r) {
+    send_displ[static_cast<std::size_t>(r)] = total_send;
+    send_bytes[static_cast<std::size_t>(r)] = send_n[static_cast<std::size_t>(r)] * static_cast<int>(record);
+    total_send += send_bytes[static_cast<std::size_t>(r)];
+    recv_displ[static_cast<std::size_t>(r)] = total_recv;
+    recv_bytes[static_cast<std::size_t>(r)] = recv_n[static_cast<std::size_t>(r)] * static_cast<int>(record);
+    total_recv += recv_bytes[static_cast<std::size_t>(r)];
+  }
+  std::vector<char> out(static_cast<std::size_t>(total_send)), in(static_cast<std::size_t>(total_recv));
+  {
+    std::size_t k = 0;
+    std::vector<std::size_t> at(send_displ.begin(), send_displ.end());
+    ps.for_each_field([&](auto& f) {
+      if (!layout.active[k++]) return;
+      using T = typename std::decay_t<decltype(f)>::value_type;
+      for (int r = 0; r < R; ++r)
+        for (int j = send_at[static_cast<std::size_t>(r)]; j < send_at[static_cast<std::size_t>(r) + 1]; ++j) {
+          std::memcpy(out.data() + at[static_cast<std::size_t>(r)], &f[static_cast<std::size_t>(leaving[static_cast<std::size_t>(j)])], sizeof(T));
+          at[static_cast<std::size_t>(r)] += sizeof(T);
+        }
+    });
+  }
+  MPI_Alltoallv(out.data(), send_bytes.data(), send_displ.data(), MPI_BYTE, in.data(), recv_bytes.data(),
+                  recv_displ.data(), MPI_BYTE, PETSC_COMM_WORLD);
+  if (sent == 0 && received == 0) {
+    add_communication_seconds(MPI_Wtime() - t0);
+    return false;
+  }
+  compact(ps, keep, layout);
+  const std::size_t n_keep = keep.size(), n_new = n_keep + static_cast<std::size_t>(received);
+  {
+    std::size_t k = 0;
+    std::vector<std::size_t> at(recv_displ.begin(), recv_displ.end());
+    ps.for_each_field([&](auto& f) {
+      if (!layout.active[k++]) return;
+      using T = typename std::decay_t<decltype(f)>::value_type;
+      f.resize(n_new);
+      std::size_t pos = n_keep;
+      for (int r = 0; r < R; ++r)
+        for (int j = 0; j < recv_n[static_cast<std::size_t>(r)]; ++j) {
+          std::memcpy(static_cast<void*>(&f[pos++]), in.data() + at[static_cast<std::size_t>(r)], sizeof(T));
+          at[static_cast<std::size_t>(r)] += sizeof(T);
+        }
+    });
+  }
+  // Back to key order (the one-rank run's storage order).
+  if (!std::is_sorted(ps.key.begin(), ps.key.end())) {
+    std::vector<int> order(n_new);
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return ps.key[static_cast<std::size_t>(a)] < ps.key[static_cast<std::size_t>(b)]; });
+    reorder.apply(ps, order);
+  }
+  add_communication_seconds(MPI_Wtime() - t0);
+  return true;
+}
+
+template <int Dim>
+ParticleSet<Dim> gather_set(const ParticleSet<Dim>& ps) {
+  ParticleSet<Dim> all = ps;
+  if (ranks() == 1) return all;
+  // The fields the set carries on any rank that holds particles.
+  FieldBytes layout;
+  std::vector<long> active;
+  const std::size_t n = all.size();
+  all.for_each_field([&](auto& f) { active.push_back(n > 0 && f.size() == n); });
+  max(std::span<long>(active));
+  for (long a : active) layout.active.push_back(static_cast<char>(a));
+  all.for_each_field([&, k = std::size_t{0}](auto& f) mutable {
+    if (layout.active[k++] && f.size() != n) f.resize(n);
+  });
+  Reorder<Dim> reorder;
+  move_particles(all, std::vector<int>(n, 0), layout, reorder);
+  return all;
+}
+
+template bool move_particles<2>(ParticleSet<2>&, const std::vector<int>&, const FieldBytes&, Reorder<2>&);
+template bool move_particles<3>(ParticleSet<3>&, const std::vector<int>&, const FieldBytes&, Reorder<3>&);
+template ParticleSet<2> gather_set<2>(const ParticleSet<2>&);
+template ParticleSet<3> gather_set<3>(const ParticleSet<3>&);
+
+}  // namespace swmpm::parallel

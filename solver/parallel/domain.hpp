@@ -1,0 +1,278 @@
+// Domain decomposition over MPI ranks: who owns which particles and nodes, the exchange of node
+// columns at the cuts, and the migration of particles. The one place that knows about ranks
+// besides comm.hpp; formulations hold a Domain and call it at named points of their step.
+//
+// The cut follows the scatter schedule (transfer/schedule.hpp). Particles are binned into stripes
+// of W = S node columns along the grid's longest axis by their first node; a rank owns a run of
+// whole stripes [cut_r, cut_{r+1}) and every particle whose stripe is in it:
+//
+//      rank 0            | rank 1                          node columns along the stripe axis
+//   ... s-2 | s-1 (c0)   | s (c1) | s+1 ...                 stripes, colour = stripe parity
+//              [sW ... sW+S-2] shared columns: touched by stripe s-1 (rank 0) and stripe s (rank 1)
+//
+// One rank adds a node's contributions stripe by stripe, colour 0 first, particles in storage
+// order inside a stripe. N ranks do the same: after colour 0 the rank that ran the colour-0
+// stripe at a cut hands its partial sums of the shared columns to the other (who has none yet);
+// after colour 1 the finished sums go back (StripeExchange, on PETSc's star forest). Inside a
+// stripe, every rank keeps its particles in the one-rank run's storage order (ParticleSet::key,
+// carried across migration and renumbered when the one-rank run would reorder). So each node, and
+// hence every particle, gets the one-rank values bit for bit.
+//
+// Ownership of nodes (for the pressure solves, PETSc DMDA): rank r owns node columns
+// [W cut_r, W cut_{r+1}); its particles also touch the S - 1 shared columns above, which it holds
+// as ghosts with the finished values.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <numeric>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "solver/grid/grid.hpp"
+#include "solver/parallel/comm.hpp"
+#include "solver/particles/particles.hpp"
+#include "solver/transfer/schedule.hpp"
+
+namespace swmpm::parallel {
+
+/// The exchange of shared node columns between the scatter's two colours (PETSc star forests,
+/// domain.cpp). Built from the cuts; rebuilt when they move.
+class StripeExchange final : public NodeExchange {
+ public:
+  StripeExchange(const std::array<int, 3>& nodes, int axis, int width, int support, const std::vector<int>& cuts);
+  ~StripeExchange() override;
+  StripeExchange(const StripeExchange&) = delete;
+  StripeExchange& operator=(const StripeExchange&) = delete;
+  void after_colour(int colour, void* nodes, std::size_t bytes) const override;
+  /// The node columns [first, second) this rank owns along the axis, as PETSc's DMDA holds them.
+  std::pair<int, int> owned_columns() const { return owned_; }
+
+ private:
+  std::pair<int, int> owned_{0, 0};
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Particle migration: moves whole particles (every field the set carries) between ranks in one
+/// all-to-all, then puts each rank's set back in key order (domain.cpp).
+/// `dest[p]`: the rank particle p must live on. Returns whether this rank's set changed.
+struct FieldBytes {
+  std::vector<char> active;  // per field of ParticleSet::for_each_field: carried by this set
+};
+
+/// Keeps particles `keep` (increasing) of ps, in that order (the fields `layout` marks).
+template <int Dim>
+void compact(ParticleSet<Dim>& ps, const std::vector<int>& keep, const FieldBytes& layout) {
+  std::size_t k = 0;
+  ps.for_each_field([&](auto& f) {
+    if (!layout.active[k++]) return;
+    for (std::size_t j = 0; j < keep.size(); ++j) f[j] = f[static_cast<std::size_t>(keep[j])];
+    f.resize(keep.size());
+  });
+}
+
+/// Moves particle p of `ps` to rank dest[p] (the fields `layout` marks), in one all-to-all;
+/// the set is then in key order. Collective. Returns whether this rank's set changed.
+template <int Dim>
+bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout, Reorder<Dim>& reorder);
+
+/// Every rank's particles of a set, on rank 0, in key order: the one-rank run's set in its storage
+/// order (the others get an empty set). Collective. For what is measured once per frame over the
+/// whole set (the stability indicators): it costs rank 0 the memory of the whole set.
+template <int Dim>
+ParticleSet<Dim> gather_set(const ParticleSet<Dim>& ps);
+
+template <int Dim>
+class Domain {
+ public:
+  /// One rank: an inactive domain (every call below is free).
+  Domain() = default;
+
+  bool active() const { return ranks() > 1; }
+  int axis() const { return axis_; }
+  int width() const { return width_; }
+  const std::vector<int>& cuts() const { return cuts_; }
+  const NodeExchange* exchange() const { return exchange_.get(); }
+
+  /// The decomposition of grid `g` for shape functions of `support` nodes per axis, with the cuts
+  /// balanced on `sets` (the whole run's particles, which every rank holds at the start). Each
+  /// rank then keeps its own particles (keys: their index in the whole set).
+  template <class FirstNode>
+  void distribute(const Grid<Dim>& g, int support, std::vector<ParticleSet<Dim>*> sets, FirstNode&& first_node) {
+    if (!active()) return;
+    axis_ = 0;
+    for (int a = 1; a < Dim; ++a)
+      if (g.nodes_per_axis()[a] > g.nodes_per_axis()[axis_]) axis_ = a;  // transfer::stripe_axis
+    width_ = support;
+    support_ = support;
+    nodes_.fill(1);
+    for (int a = 0; a < Dim; ++a) nodes_[a] = g.nodes_per_axis()[a];
+    stripes_ = (nodes_[axis_] + width_ - 1) / width_;
+    if (stripes_ < ranks())
+      throw std::runtime_error("the grid has " + std::to_string(stripes_) + " stripes of " + std::to_string(width_) +
+                               " node columns along axis " + std::to_string(axis_) + ", fewer than the " +
+                               std::to_string(ranks()) + " ranks: run on at most " + std::to_string(stripes_) +
+                               " ranks");
+    layouts_.clear();
+    std::vector<long> per_stripe(static_cast<std::size_t>(stripes_), 0);
+    std::vector<std::vector<int>> stripe_of(sets.size());
+    for (std::size_t k = 0; k < sets.size(); ++k) {
+      ParticleSet<Dim>& ps = *sets[k];
+      layouts_.push_back(layout_of(ps));
+      stripe_of[k].resize(ps.size());
+      for (std::size_t p = 0; p < ps.size(); ++p) {
+        const int s = std::clamp(first_node(k, p) / width_, 0, stripes_ - 1);
+        stripe_of[k][p] = s;
+        ++per_stripe[static_cast<std::size_t>(s)];
+      }
+    }
+    set_cuts(balanced_cuts(per_stripe));
+    for (std::size_t k = 0; k < sets.size(); ++k) {
+      ParticleSet<Dim>& ps = *sets[k];
+      ps.key.resize(ps.size());
+      std::iota(ps.key.begin(), ps.key.end(), std::int64_t{0});
+      std::vector<int> keep;
+      for (std::size_t p = 0; p < ps.size(); ++p)
+        if (owner(stripe_of[k][p]) == rank()) keep.push_back(static_cast<int>(p));
+      compact(ps, keep, layouts_[k]);
+    }
+  }
+
+  /// The rank that owns stripe s.
+  int owner(int s) const {
+    s = std::clamp(s, 0, stripes_ - 1);
+    return static_cast<int>(std::upper_bound(cuts_.begin(), cuts_.end(), s) - cuts_.begin()) - 1;
+  }
+  int stripe_of_node(int first_node) const { return first_node / width_; }
+
+  /// Moves every particle of set k whose first node along the axis (first_node(p)) lies in
+  /// another rank's stripes to that rank; the set stays in key order. Collective. Returns whether
+  /// this rank's set changed.
+  template <class FirstNode>
+  bool migrate(std::size_t k, ParticleSet<Dim>& ps, FirstNode&& first_node) {
+    if (!active()) return false;
+    dest_.resize(ps.size());
+    for (std::size_t p = 0; p < ps.size(); ++p) {
+      dest_[p] = owner(first_node(p) / width_);
+      migrated_ += dest_[p] != rank();
+    }
+    return move_particles(ps, dest_, layouts_.at(k));
+  }
+
+  /// The keys after the one-rank run's reordering (reorder_for_locality): a rank's particles, now
+  /// in its schedule order, follow those of the ranks before it.
+  void renumber(ParticleSet<Dim>& ps) const {
+    if (!active()) return;
+    const std::vector<long> counts = all_gather(static_cast<long>(ps.size()));
+    std::int64_t first = 0;
+    for (int r = 0; r < rank(); ++r) first += counts[static_cast<std::size_t>(r)];
+    ps.key.resize(ps.size());
+    std::iota(ps.key.begin(), ps.key.end(), first);
+  }
+
+  /// The node box a rank's per-node work covers: its own node columns and the shared ones above
+  /// (so that every shared column is cleared before a scatter and finished on both sides), across
+  /// the union of the ranks' boxes on the other axes.
+  NodeBox<Dim> node_box(NodeBox<Dim> box) const {
+    if (!active()) return box;
+    std::array<long, 2 * Dim> lohi;
+    for (int a = 0; a < Dim; ++a) lohi[a] = box.lo[a], lohi[Dim + a] = -static_cast<long>(box.hi[a]);
+    min(std::span<long>(lohi));
+    for (int a = 0; a < Dim; ++a) box.lo[a] = static_cast<int>(lohi[a]), box.hi[a] = static_cast<int>(-lohi[Dim + a]);
+    box.lo[axis_] = cuts_[rank()] * width_;
+    box.hi[axis_] = std::min(nodes_[axis_] - 1, cuts_[rank() + 1] * width_ + support_ - 2);
+    return box;
+  }
+
+  /// Re-cuts for an equal particle count per rank when the counts differ by more than
+  /// `tolerance` (0.1: the largest rank holds 10 % more than the mean). Collective; the caller
+  /// migrates afterwards. Returns whether the cuts moved.
+  bool rebalance(const std::vector<long>& local_per_stripe, double tolerance) {
+    if (!active()) return false;
+    std::vector<long> per_stripe = local_per_stripe;
+    sum(std::span<long>(per_stripe));
+    std::vector<long> load(static_cast<std::size_t>(ranks()), 0);
+    for (int s = 0; s < stripes_; ++s) load[static_cast<std::size_t>(owner(s))] += per_stripe[static_cast<std::size_t>(s)];
+    const long total = std::accumulate(load.begin(), load.end(), 0L);
+    const long most = *std::max_element(load.begin(), load.end());
+    if (total == 0 || static_cast<double>(most) <= (1.0 + tolerance) * static_cast<double>(total) / ranks()) return false;
+    std::vector<int> cuts = balanced_cuts(per_stripe);
+    if (cuts == cuts_) return false;
+    set_cuts(std::move(cuts));
+    ++rebalances_;
+    return true;
+  }
+  int stripes() const { return stripes_; }
+  int rebalances() const { return rebalances_; }
+  /// The run's counters (mpirun): particles that moved between ranks (over all ranks) and re-cuts.
+  /// Collective.
+  template <class Counter>
+  void add_counters(std::vector<Counter>& out) const {
+    if (!active()) return;
+    out.push_back({"particles migrated", static_cast<double>(sum(migrated_)), "particle moves between ranks"});
+    out.push_back({"rebalances", static_cast<double>(rebalances_), "re-cuts for an even particle count"});
+  }
+
+ private:
+  /// Stripe cuts with about total / ranks particles per rank (every rank at least one stripe).
+  std::vector<int> balanced_cuts(const std::vector<long>& per_stripe) const {
+    const int R = ranks();
+    std::vector<int> cuts(static_cast<std::size_t>(R) + 1, 0);
+    cuts[static_cast<std::size_t>(R)] = stripes_;
+    const double total = static_cast<double>(std::accumulate(per_stripe.begin(), per_stripe.end(), 0L));
+    long below = 0;
+    int s = 0;
+    for (int r = 1; r < R; ++r) {
+      const double target = total * r / R;
+      // Smallest s (after the previous cut, leaving a stripe for each later rank) with the
+      // particles below s closest to the target.
+      s = std::max(s, cuts[static_cast<std::size_t>(r) - 1] + 1);
+      while (s < stripes_ - (R - r) && static_cast<double>(below + per_stripe[static_cast<std::size_t>(s)]) <= target) {
+        below += per_stripe[static_cast<std::size_t>(s)];
+        ++s;
+      }
+      s = std::min(s, stripes_ - (R - r));
+      cuts[static_cast<std::size_t>(r)] = s;
+      below = 0;
+      for (int q = 0; q < s; ++q) below += per_stripe[static_cast<std::size_t>(q)];
+    }
+    return cuts;
+  }
+
+  void set_cuts(std::vector<int> cuts) {
+    cuts_ = std::move(cuts);
+    exchange_ = std::make_unique<StripeExchange>(nodes_, axis_, width_, support_, cuts_);
+  }
+
+  static FieldBytes layout_of(ParticleSet<Dim>& ps) {
+    FieldBytes l;
+    const std::size_t n = ps.size();
+    ps.for_each_field([&](auto& f) { l.active.push_back(n > 0 && f.size() == n); });
+    // The key is carried by every set under mpirun.
+    l.active.back() = 1;
+    return l;
+  }
+
+  bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout) {
+    return parallel::move_particles(ps, dest, layout, reorder_);
+  }
+
+  int axis_ = 0, width_ = 1, support_ = 1, stripes_ = 1;
+  std::array<int, 3> nodes_{1, 1, 1};
+  std::vector<int> cuts_;
+  std::unique_ptr<StripeExchange> exchange_;
+  std::vector<FieldBytes> layouts_;
+  std::vector<int> dest_;
+  Reorder<Dim> reorder_;
+  int rebalances_ = 0;
+  long migrated_ = 0;  // this rank's particles sent away
+};
+
+}  // namespace swmpm::parallel

@@ -1,0 +1,194 @@
+// `mpirun -n N swmpm solve RUN_DIR` (solver/parallel/): the same scene and CLI as one rank, the
+// same answers bit for bit (the explicit formulations), one results.pvd over per-rank .pvtu
+// pieces, monitors.csv once, run.json with the ranks, particles per rank and communication time.
+// CI runs as root: OpenMPI's two variables allow it (mpirun refuses root without them).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <numeric>
+
+#include "support/run_helpers.hpp"
+
+namespace swmpm::testing {
+namespace {
+
+/// `mpirun -n N swmpm ARGS` (oversubscribed: N may exceed the cores), output captured under dir.
+Result mpirun(int n, const std::string& args, const fs::path& dir) {
+  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
+  // `timeout`: a rank that waits for ever in a collective fails the test instead of hanging CI.
+  const std::string cmd = "timeout 300 env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 " +
+                          std::string(SWMPM_MPIEXEC) + " -n " + std::to_string(n) + " " + SWMPM_EXE + " " + args +
+                          " > " + out + " 2> " + err;
+  const int raw = std::system(cmd.c_str());
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, read_text(out), read_text(err)};
+}
+
+/// A frame with its points in increasing id (a .pvtu holds each rank's piece in turn).
+scene::PointCloud sorted_by_id(const scene::PointCloud& c) {
+  const auto* id = c.find("id");
+  EXPECT_NE(id, nullptr);
+  std::vector<std::size_t> order(c.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return id->values[a] < id->values[b]; });
+  scene::PointCloud s = c;
+  for (std::size_t k = 0; k < order.size(); ++k) s.points[k] = c.points[order[k]];
+  for (std::size_t a = 0; a < c.arrays.size(); ++a) {
+    const auto n = static_cast<std::size_t>(c.arrays[a].components);
+    for (std::size_t k = 0; k < order.size(); ++k)
+      for (std::size_t j = 0; j < n; ++j) s.arrays[a].values[k * n + j] = c.arrays[a].values[order[k] * n + j];
+  }
+  return s;
+}
+
+/// Number of values that differ (bitwise) between two frames of the same particles, matched by id.
+long differing_values(const scene::PointCloud& a_in, const scene::PointCloud& b_in) {
+  const auto a = sorted_by_id(a_in), b = sorted_by_id(b_in);
+  EXPECT_EQ(a.size(), b.size());
+  EXPECT_EQ(a.arrays.size(), b.arrays.size());
+  if (a.size() != b.size()) return -1;
+  long differ = 0;
+  for (std::size_t k = 0; k < a.size(); ++k)
+    for (int d = 0; d < 3; ++d) differ += a.points[k][d] != b.points[k][d];
+  for (const auto& arr : a.arrays) {
+    const auto* other = b.find(arr.name);
+    EXPECT_NE(other, nullptr) << arr.name;
+    if (!other) return -1;
+    for (std::size_t k = 0; k < arr.values.size(); ++k) differ += arr.values[k] != other->values[k];
+  }
+  return differ;
+}
+
+/// A granular column collapsing to the right over the grid: the slide carries most points across
+/// the cut between the ranks (the cut is balanced on the column's points at the start).
+nlohmann::json column_collapse(int dim, const std::string& shape) {
+  const bool three = dim == 3;
+  nlohmann::json s = {
+      {"name", "collapse"},
+      {"dimension", dim},
+      {"formulation", "dry"},
+      {"gravity", three ? nlohmann::json{0.0, -9.81, 0.0} : nlohmann::json{0.0, -9.81}},
+      {"grid",
+       {{"cell_size", three ? 0.04 : 0.02},
+        {"min", three ? nlohmann::json{0.0, 0.0, 0.0} : nlohmann::json{0.0, 0.0}},
+        {"max", three ? nlohmann::json{0.8, 0.28, 0.12} : nlohmann::json{0.8, 0.3}},
+        {"shape_function", shape}}},
+      {"materials",
+       {{{"name", "sand"}, {"model", "mohr-coulomb"}, {"density", 1800.0}, {"youngs_modulus", 2e6},
+         {"poisson_ratio", 0.3}, {"cohesion", 0.0}, {"friction_angle", 30.0}, {"dilation_angle", 0.0}}}},
+      {"bodies",
+       {{{"name", "column"},
+         {"geometry",
+          {{"type", "box"},
+           {"min", three ? nlohmann::json{0.0, 0.0, 0.0} : nlohmann::json{0.0, 0.0}},
+           {"max", three ? nlohmann::json{0.2, 0.2, 0.12} : nlohmann::json{0.2, 0.2}}}},
+         {"solid", "sand"},
+         {"particles_per_cell", 2}}}},
+      {"boundaries",
+       {{{"on", "x_min"}, {"solid", "roller"}}, {{"on", "x_max"}, {"solid", "roller"}},
+        {{"on", "y_min"}, {"solid", "fixed"}}}},
+      {"time", {{"end", three ? 0.25 : 0.3}, {"dt", "auto"}, {"cfl", 0.5}}},
+      {"solver", {{"flip", 0.99}, {"damping", 0.0}}},
+      {"output",
+       {{"interval", 0.1},
+        {"monitor_interval", 0.01},
+        {"monitors",
+         {{{"name", "toe"}, {"at", three ? nlohmann::json{0.19, 0.01, 0.06} : nlohmann::json{0.19, 0.01}},
+           {"phase", "solid"}, {"quantities", {"displacement_x", "velocity_x"}}},
+          {{"name", "top"}, {"at", three ? nlohmann::json{0.01, 0.19, 0.06} : nlohmann::json{0.01, 0.19}},
+           {"phase", "solid"}, {"quantities", {"displacement_y", "stress_yy"}}},
+          {{"name", "energy"}, {"quantities", {"kinetic_energy", "strain_energy"}}}}}}}};
+  if (three) s["boundaries"].push_back({{"on", "z_min"}, {"solid", "roller"}}), s["boundaries"].push_back({{"on", "z_max"}, {"solid", "roller"}});
+  return s;
+}
+
+struct Pair {
+  fs::path dir;
+  std::string one, many;
+  Result one_result, many_result;
+};
+
+/// Preprocess once; solve the run on one rank (no mpirun) and on `ranks` ranks, one thread each.
+Pair solve_both(const nlohmann::json& scene, const std::string& name, int ranks) {
+  Pair p;
+  p.dir = scratch(name);
+  std::ofstream(p.dir / "scene.json") << scene.dump(2);
+  p.one = (p.dir / "one").string();
+  p.many = (p.dir / "many").string();
+  EXPECT_EQ(swmpm_cmd("preprocess " + (p.dir / "scene.json").string() + " -o " + p.one + " -q", p.dir).status, 0);
+  EXPECT_EQ(swmpm_cmd("preprocess " + (p.dir / "scene.json").string() + " -o " + p.many + " -q", p.dir).status, 0);
+  p.one_result = swmpm_cmd("solve " + p.one + " -q --threads 1", p.dir);
+  p.many_result = mpirun(ranks, "solve " + p.many + " -q --threads 1", p.dir);
+  EXPECT_EQ(p.one_result.status, 0) << p.one_result.err;
+  EXPECT_EQ(p.many_result.status, 0) << p.many_result.err;
+  return p;
+}
+
+/// Every frame of `many` equals the one-rank frame bit for bit; monitors.csv is the same file.
+void expect_same_answers(const Pair& p) {
+  const auto one = scene::read_pvd(p.one + "/output/results.pvd");
+  const auto many = scene::read_pvd(p.many + "/output/results.pvd");
+  ASSERT_EQ(one.size(), many.size());
+  for (std::size_t k = 0; k < one.size(); ++k) {
+    EXPECT_EQ(one[k].time, many[k].time);
+    EXPECT_EQ(many[k].file.substr(many[k].file.size() - 5), ".pvtu");
+    const auto a = scene::read_vtu(p.one + "/output/" + one[k].file);
+    const auto b = scene::read_vtu(p.many + "/output/" + many[k].file);
+    EXPECT_EQ(differing_values(a, b), 0) << "frame " << k << " (t = " << one[k].time << " s)";
+  }
+  EXPECT_EQ(read_text(p.one + "/monitors.csv"), read_text(p.many + "/monitors.csv"));
+}
+
+TEST(Mpirun, DryCollapseOnTwoRanksIsBitwiseTheOneRankRun2D) {
+  const Pair p = solve_both(column_collapse(2, "bspline2"), "mpirun-dry-2d", 2);
+  expect_same_answers(p);
+  const auto rj = load_json(p.many + "/run.json");
+  EXPECT_EQ(rj["ranks"], 2);
+  const long total = rj["particles"]["solid"];
+  const long lo = rj["particles_per_rank"]["min"], hi = rj["particles_per_rank"]["max"];
+  EXPECT_EQ(total, 400);
+  EXPECT_EQ(rj["particles_per_rank"]["each"][0].get<long>() + rj["particles_per_rank"]["each"][1].get<long>(), total);
+  EXPECT_GT(lo, 0);
+  EXPECT_LE(lo, hi);
+  EXPECT_GT(rj["communication_seconds"]["max"].get<double>(), 0.0);
+  // The slide crossed the cut, and the load was evened out as it went.
+  EXPECT_GT(rj["counters"]["particles migrated"].get<double>(), 100.0);
+  EXPECT_GE(rj["counters"]["rebalances"].get<double>(), 1.0);
+  // One monitors.csv, one results.pvd; each frame's pieces, one per rank.
+  EXPECT_TRUE(fs::exists(p.many + "/output/solid_000001_0.vtu"));
+  EXPECT_TRUE(fs::exists(p.many + "/output/solid_000001_1.vtu"));
+  EXPECT_EQ(load_json(p.one + "/run.json")["ranks"], 1);
+}
+
+TEST(Mpirun, DryCollapseOnTwoRanksIsBitwiseTheOneRankRun3D) {
+  const Pair p = solve_both(column_collapse(3, "gimp"), "mpirun-dry-3d", 2);
+  expect_same_answers(p);
+  EXPECT_GT(load_json(p.many + "/run.json")["counters"]["particles migrated"].get<double>(), 0.0);
+}
+
+TEST(Mpirun, DryCollapseOnFourOversubscribedRanksIsBitwiseTheOneRankRun) {
+  // Four ranks on two cores: a correctness check only (their speed means nothing here).
+  const Pair p = solve_both(column_collapse(2, "linear"), "mpirun-dry-4", 4);
+  expect_same_answers(p);
+  EXPECT_EQ(load_json(p.many + "/run.json")["particles_per_rank"]["each"].size(), 4u);
+}
+
+TEST(Mpirun, AFormulationNotYetOnSeveralRanksIsRefusedBeforeAnythingIsWritten) {
+  nlohmann::json s = column_collapse(2, "bspline2");
+  s["solver"]["stabilisation"] = {{"fbar", "standard"}};
+  const fs::path dir = scratch("mpirun-refused");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const std::string run = (dir / "run").string();
+  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run + " -q", dir).status, 0);
+  const Result r = mpirun(2, "solve " + run + " -q --threads 1", dir);
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find(run + "/scene.json: solver.stabilisation.fbar does not run on several ranks yet"), std::string::npos)
+      << r.err;
+  // One message (the other rank stays silent), and no output.
+  EXPECT_EQ(r.err.find("does not run"), r.err.rfind("does not run")) << r.err;
+  EXPECT_FALSE(fs::exists(run + "/run.json"));
+  EXPECT_FALSE(fs::exists(run + "/output"));
+}
+
+}  // namespace
+}  // namespace swmpm::testing
