@@ -24,6 +24,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <cstdint>
 #include <cstring>
@@ -221,27 +222,23 @@ class Domain {
   }
 
  private:
-  /// Stripe cuts with about total / ranks particles per rank (every rank at least one stripe).
+  /// Stripe cuts with about total / ranks particles per rank (every rank at least one stripe): cut
+  /// r at the stripe where the particles below come closest to r total / ranks.
   std::vector<int> balanced_cuts(const std::vector<long>& per_stripe) const {
     const int R = ranks();
+    std::vector<long> below(static_cast<std::size_t>(stripes_) + 1, 0);  // particles in stripes < s
+    for (int s = 0; s < stripes_; ++s) below[static_cast<std::size_t>(s) + 1] = below[static_cast<std::size_t>(s)] + per_stripe[static_cast<std::size_t>(s)];
     std::vector<int> cuts(static_cast<std::size_t>(R) + 1, 0);
     cuts[static_cast<std::size_t>(R)] = stripes_;
-    const double total = static_cast<double>(std::accumulate(per_stripe.begin(), per_stripe.end(), 0L));
-    long below = 0;
-    int s = 0;
     for (int r = 1; r < R; ++r) {
-      const double target = total * r / R;
-      // Smallest s (after the previous cut, leaving a stripe for each later rank) with the
-      // particles below s closest to the target.
-      s = std::max(s, cuts[static_cast<std::size_t>(r) - 1] + 1);
-      while (s < stripes_ - (R - r) && static_cast<double>(below + per_stripe[static_cast<std::size_t>(s)]) <= target) {
-        below += per_stripe[static_cast<std::size_t>(s)];
-        ++s;
-      }
-      s = std::min(s, stripes_ - (R - r));
-      cuts[static_cast<std::size_t>(r)] = s;
-      below = 0;
-      for (int q = 0; q < s; ++q) below += per_stripe[static_cast<std::size_t>(q)];
+      const double target = static_cast<double>(below.back()) * r / R;
+      const int lo = cuts[static_cast<std::size_t>(r) - 1] + 1, hi = stripes_ - (R - r);
+      int best = lo;
+      for (int s = lo; s <= hi; ++s)
+        if (std::abs(static_cast<double>(below[static_cast<std::size_t>(s)]) - target) <
+            std::abs(static_cast<double>(below[static_cast<std::size_t>(best)]) - target))
+          best = s;
+      cuts[static_cast<std::size_t>(r)] = best;
     }
     return cuts;
   }
