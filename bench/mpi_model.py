@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""A model of swmpm's time per step on P ranks (issue 28), from measured inputs and a stated network.
+
+Per step and rank (explicit formulations; the decomposition of solver/parallel/domain.hpp):
+  compute   n_r * c                   c: measured us per particle-step on one rank, one thread
+                                      (bench/mpi_scaling.py), n_r = n / P times the load imbalance
+                                      the rebalancing allows (5 %)
+  exchange  k_x * (alpha + m / beta)  the shared node columns after each colour of each scatter
+                                      (k_x = 4 for dry: two scatters, two phases), m = (S - 1) x the
+                                      nodes of a cross-section x the bytes a node carries
+  migration alpha * P + q / beta      MPI_Alltoall of counts and MPI_Alltoallv of the particles that
+                                      cross a cut (pairwise: P messages), q = the crossing
+                                      particles' bytes (a slide at speed v moves v dt / h of a
+                                      cell layer per step)
+  reductions k_r * 2 log2(P) * alpha  allreduces per step (node box, dt: 3, health, interrupt)
+The time step does not depend on P. Efficiency E(P) = t(1) / t(P) at fixed particles per rank
+(weak), and the per-step time of a fixed problem at P ranks (strong).
+
+The decomposition cuts one axis into slabs of whole stripes (S node columns): at most
+ceil(nodes along the axis / S) ranks. The model says where that limit stands for the 10^8-point
+slope and what a second cut axis would give.
+
+Usage: bench/mpi_model.py --us-per-particle-step 0.45 [--alpha 1.5e-6] [--beta 12e9] [--out FILE]
+"""
+import argparse, math
+
+
+def step_time(n_r, P, cross_nodes, c_us, alpha, beta, S=3, node_bytes=56, particle_bytes=420,
+              crossing_fraction=0.0, k_x=4, k_r=6, imbalance=1.05):
+    if P == 1:
+        return n_r * c_us * 1e-6, 0.0
+    compute = n_r * imbalance * c_us * 1e-6
+    m = (S - 1) * cross_nodes * node_bytes
+    exchange = k_x * (alpha + m / beta)
+    q = crossing_fraction * n_r * particle_bytes
+    migration = alpha * P + q / beta
+    reductions = k_r * 2 * math.log2(P) * alpha
+    return compute, exchange + migration + reductions
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--us-per-particle-step", type=float, required=True,
+                    help="measured: 3D dry GIMP, one rank, one thread (bench/mpi_scaling.py)")
+    ap.add_argument("--alpha", type=float, default=1.5e-6, help="s, message latency (InfiniBand HDR class)")
+    ap.add_argument("--beta", type=float, default=12e9, help="bytes/s, link bandwidth per rank")
+    ap.add_argument("--out", default="")
+    a = ap.parse_args()
+    c = a.us_per_particle_step
+    lines = ["# swmpm scaling model (bench/mpi_model.py)", "",
+             f"Inputs: c = {c} us per particle-step (measured, 3D dry, GIMP, one thread); network alpha = "
+             f"{a.alpha * 1e6:.1f} us, beta = {a.beta / 1e9:.0f} GB/s; S = 3 (GIMP), 56 B per node "
+             "(mass, momentum, force), 420 B per migrating particle, 5 % load imbalance, 4 exchanges and "
+             "6 allreduces per step, a slide moving 1 % of a rank's particles across a cut per step.", ""]
+
+    # Weak scaling at 1e6 particles per rank: each rank a slab of a cube-ish block, 8 points per cell:
+    # 1.25e5 cells per rank, e.g. 50 cells thick along the cut axis and 50 x 50 across.
+    n_r = 1e6
+    cross = 52 * 52  # nodes of the cross-section (GIMP: cells + 1, plus the margin)
+    lines += ["## Weak scaling, 10^6 particles per rank (a slab of 50 x 50 x 50 cells per rank)", "",
+              "| ranks | compute s/step | communication s/step | efficiency |", "|---|---|---|---|"]
+    t1, _ = step_time(n_r, 1, cross, c, a.alpha, a.beta)
+    for P in (1, 2, 16, 128, 1024):
+        comp, comm = step_time(n_r, P, cross, c, a.alpha, a.beta, crossing_fraction=0.01)
+        lines.append(f"| {P} | {comp:.4f} | {comm:.6f} | {t1 / (comp + comm):.3f} |")
+
+    # The 1e8-point 3D slope: 8 points per cell, the soil filling half a grid of 1000 x 250 x 100 cells.
+    n = 1e8
+    nx, ny, nz = 1000, 250, 100
+    stripes = math.ceil((nx + 2) / 3)
+    lines += ["", "## Strong scaling, a 10^8-point 3D slope (grid 1000 x 250 x 100 cells, soil in half of it)", "",
+              f"Slabs along x: at most {stripes} ranks (stripes of 3 node columns). "
+              "Beyond that, a second cut axis (pencils) is modelled: the cross-section of a rank's block shrinks "
+              "by the number of cuts across, and the messages double (two neighbour directions).", "",
+              "| ranks | decomposition | particles per rank | compute s/step | communication s/step | efficiency vs 1 rank |",
+              "|---|---|---|---|---|---|"]
+    t_one, _ = step_time(n, 1, 0, c, a.alpha, a.beta)
+    for P in (1, 64, 256, stripes, 1024):
+        if P <= stripes:
+            kind, cross_nodes, k_x = "slabs", (ny + 2) * (nz + 2), 4
+        else:
+            across = math.ceil(P / stripes)
+            kind, cross_nodes, k_x = f"pencils ({stripes} x {across})", (ny + 2) * (nz + 2) / across + (nx + 2) / stripes * (nz + 2), 8
+        comp, comm = step_time(n / P, P, cross_nodes, c, a.alpha, a.beta, crossing_fraction=0.01, k_x=k_x)
+        lines.append(f"| {P} | {kind} | {n / P:.3g} | {comp:.4f} | {comm:.6f} | {t_one / (P * (comp + comm)):.3f} |")
+    lines += ["", "The pencils row is a model of a decomposition swmpm does not have yet (one cut axis today)."]
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if a.out:
+        with open(a.out, "w") as f:
+            f.write(text)
+
+
+if __name__ == "__main__":
+    main()
