@@ -49,8 +49,8 @@ def prepare(swmpm, sc, work):
     return rd
 
 
-def solve(swmpm, rd, ranks):
-    cmd = [swmpm, "-q", "solve", rd, "--threads", "1"]
+def solve(swmpm, rd, ranks, threads=1):
+    cmd = [swmpm, "-q", "solve", rd, "--threads", str(threads)]
     if ranks > 1:
         cmd = ["mpirun", "-n", str(ranks)] + cmd
     subprocess.run(cmd, check=True, env=MPI_ENV)
@@ -85,7 +85,7 @@ def main():
     runs = {r: prepare(a.swmpm, scene(f"box-{r}", nx, ny, nz, a.steps), work) for r in (2, 4)}
     weak1 = base
     weak2 = prepare(a.swmpm, scene("box-weak", 2 * nx, ny, nz, a.steps), work)
-    t = {"strong1": [], "strong2": [], "weak2": []}
+    t = {"strong1": [], "strong2": [], "weak2": [], "threads2": []}
     last = {}
     for _ in range(a.repeat):
         last["strong1"] = solve(a.swmpm, base, 1)
@@ -94,26 +94,31 @@ def main():
         t["strong2"].append(last["strong2"])
         last["weak2"] = solve(a.swmpm, weak2, 2)
         t["weak2"].append(last["weak2"])
+        t["threads2"].append(solve(a.swmpm, base, 1, threads=2))
     four = solve(a.swmpm, runs[4], 4)
     best = {k: min(v, key=lambda r: r["loop_seconds"]) for k, v in t.items()}
     T1, T2, W2 = best["strong1"]["loop_seconds"], best["strong2"]["loop_seconds"], best["weak2"]["loop_seconds"]
     n1 = best["strong1"]["particles"]["solid"]
     nw = best["weak2"]["particles"]["solid"]
     steps = best["strong1"]["steps"]
+    TT = best["threads2"]["loop_seconds"]
     rows = [
         ("strong, 1 rank", n1, 1, T1, best["strong1"], 1.0),
+        ("reference: 1 rank, 2 OpenMP threads", n1, 2, TT, best["threads2"], T1 / (2 * TT)),
         ("strong, 2 ranks", n1, 2, T2, best["strong2"], T1 / (2 * T2)),
         ("weak, 2 ranks (2x box)", nw, 2, W2, best["weak2"], T1 / W2),
     ]
     lines = [f"# MPI scaling, 3D dry box (bench/mpi_scaling.py)", "",
              f"{datetime.date.today()}, {platform.node()}, {os.cpu_count()} cores, {a.cells} cells "
              f"(GIMP, 8 points per cell), {steps} steps, one thread per rank, fastest of {a.repeat} (interleaved).", "",
-             "| case | particles | ranks | loop s | us per particle-step (x ranks) | communication s (max rank) | particles per rank | efficiency |",
+             "| case | particles | ranks (cores) | loop s | us per particle-step (x cores) | communication s, busiest rank: all (collectives / exchange / migration) | particles per rank | efficiency |",
              "|---|---|---|---|---|---|---|---|"]
     for name, n, r, T, rj, eff in rows:
-        comm = rj.get("communication_seconds", {}).get("max", 0.0)
+        cs = rj.get("communication_seconds", {})
+        comm = (f"{cs['max']:.3f} ({cs['collectives_max']:.3f} / {cs['exchange_max']:.3f} / {cs['migration_max']:.3f})"
+                if cs else "-")
         ppr = rj.get("particles_per_rank", {}).get("each", [n])
-        lines.append(f"| {name} | {n} | {r} | {T:.3f} | {1e6 * T * r / (n * steps):.3f} | {comm:.3f} | {ppr} | {eff:.2f} |")
+        lines.append(f"| {name} | {n} | {r} | {T:.3f} | {1e6 * T * r / (n * steps):.3f} | {comm} | {ppr} | {eff:.2f} |")
     lines += ["", "Last frame against the 1-rank run (frame_diff, points by id): "
               f"2 ranks {same(a.frame_diff, last_frame(base), last_frame(runs[2]))}, "
               f"4 ranks oversubscribed {same(a.frame_diff, last_frame(base), last_frame(runs[4]))} "

@@ -1029,6 +1029,10 @@ class Runner {
     const std::vector<long> per_rank = parallel::all_gather(static_cast<long>(state_.solid.size() + state_.fluid.size()));
     const double comm_seconds = parallel::communication_seconds();
     const double comm_max = parallel::max(comm_seconds), comm_sum = parallel::sum(comm_seconds);
+    std::array<double, 3> traffic{parallel::communication_seconds(parallel::Traffic::collective),
+                                  parallel::communication_seconds(parallel::Traffic::exchange),
+                                  parallel::communication_seconds(parallel::Traffic::migration)};
+    parallel::max(std::span<double>(traffic));
     const long active_cells = parallel::sum(static_cast<long>(f_->active_cells(state_)));
     const long peak_memory = parallel::sum(static_cast<long>(peak_memory_bytes()));
     const long particle_bytes = parallel::sum(static_cast<long>(state_.solid.size() * state_.solid.bytes_per_particle() +
@@ -1063,7 +1067,11 @@ class Runner {
       rj["particles_per_rank"] = {{"min", *std::min_element(per_rank.begin(), per_rank.end())},
                                   {"max", *std::max_element(per_rank.begin(), per_rank.end())},
                                   {"each", per_rank}};
-      rj["communication_seconds"] = {{"max", comm_max}, {"mean", comm_sum / parallel::ranks()}};
+      rj["communication_seconds"] = {{"max", comm_max},
+                                     {"mean", comm_sum / parallel::ranks()},
+                                     {"collectives_max", traffic[0]},
+                                     {"exchange_max", traffic[1]},
+                                     {"migration_max", traffic[2]}};
     }
     rj["steps"] = state_.step;
     if (resume_) {

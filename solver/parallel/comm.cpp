@@ -14,13 +14,14 @@ bool g_started = false;
 vtkSmartPointer<vtkMPIController> g_vtk;
 int g_rank = 0, g_ranks = 1;
 double g_comm_seconds = 0.0;
+double g_traffic[3] = {0.0, 0.0, 0.0};  // by Traffic
 
 MPI_Comm world() { return PETSC_COMM_WORLD; }
 
 /// Times one collective into communication_seconds.
 struct Timed {
   double t0 = MPI_Wtime();
-  ~Timed() { g_comm_seconds += MPI_Wtime() - t0; }
+  ~Timed() { add_communication_seconds(MPI_Wtime() - t0, Traffic::collective); }
 };
 
 template <class T>
@@ -138,7 +139,11 @@ void barrier() {
 }
 
 double communication_seconds() { return g_comm_seconds; }
-void add_communication_seconds(double s) { g_comm_seconds += s; }
+double communication_seconds(Traffic kind) { return g_traffic[static_cast<int>(kind)]; }
+void add_communication_seconds(double s, Traffic kind) {
+  g_comm_seconds += s;
+  g_traffic[static_cast<int>(kind)] += s;
+}
 double wall_time() { return g_started ? MPI_Wtime() : 0.0; }
 
 }  // namespace swmpm::parallel

@@ -53,9 +53,13 @@ std::vector<std::vector<char>> gather_to_root(const std::vector<char>& bytes);
 void barrier();
 
 /// Seconds of wall time this rank spent in communication (collectives, ghost exchange, migration).
+/// A collective's time includes the wait for the slowest rank (load imbalance shows here).
 double communication_seconds();
+/// The parts of communication_seconds.
+enum class Traffic { collective, exchange, migration };
+double communication_seconds(Traffic kind);
 /// Adds to communication_seconds (the exchange and migration code times itself).
-void add_communication_seconds(double s);
+void add_communication_seconds(double s, Traffic kind = Traffic::collective);
 double wall_time();
 
 /// A failure of some ranks that the others share: thrown on the ranks that did not fail

@@ -125,7 +125,7 @@ void StripeExchange::after_colour(int colour, void* nodes, std::size_t bytes) co
     PetscSFBcastEnd(impl_->leaf_first, t, nodes, nodes, MPI_REPLACE);
     PetscSFReduceEnd(impl_->root_first, t, nodes, nodes, MPI_REPLACE);
   }
-  add_communication_seconds(MPI_Wtime() - t0);
+  add_communication_seconds(MPI_Wtime() - t0, Traffic::exchange);
 }
 
 // ---- particle migration --------------------------------------------------------------------------
@@ -153,8 +153,9 @@ bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const Fi
   // Leaving particles grouped by destination (increasing index inside a group), field by field.
   std::vector<int> send_at(static_cast<std::size_t>(R) + 1, 0);
   for (int r = 0; r < R; ++r) send_at[static_cast<std::size_t>(r) + 1] = send_at[static_cast<std::size_t>(r)] + send_n[static_cast<std::size_t>(r)];
+  // Most steps nobody leaves: then nothing here walks the particles.
   std::vector<int> leaving(static_cast<std::size_t>(sent)), keep;
-  {
+  if (sent > 0) {
     std::vector<int> fill(send_at.begin(), send_at.end() - 1);
     keep.reserve(n - static_cast<std::size_t>(sent));
     for (std::size_t p = 0; p < n; ++p) {
@@ -190,11 +191,11 @@ bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const Fi
   MPI_Alltoallv(out.data(), send_bytes.data(), send_displ.data(), MPI_BYTE, in.data(), recv_bytes.data(),
                   recv_displ.data(), MPI_BYTE, PETSC_COMM_WORLD);
   if (sent == 0 && received == 0) {
-    add_communication_seconds(MPI_Wtime() - t0);
+    add_communication_seconds(MPI_Wtime() - t0, Traffic::migration);
     return false;
   }
-  compact(ps, keep, layout);
-  const std::size_t n_keep = keep.size(), n_new = n_keep + static_cast<std::size_t>(received);
+  if (sent > 0) compact(ps, keep, layout);
+  const std::size_t n_keep = ps.size(), n_new = n_keep + static_cast<std::size_t>(received);
   {
     std::size_t k = 0;
     std::vector<std::size_t> at(recv_displ.begin(), recv_displ.end());
@@ -217,7 +218,7 @@ bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const Fi
     std::sort(order.begin(), order.end(), [&](int a, int b) { return ps.key[static_cast<std::size_t>(a)] < ps.key[static_cast<std::size_t>(b)]; });
     reorder.apply(ps, order);
   }
-  add_communication_seconds(MPI_Wtime() - t0);
+  add_communication_seconds(MPI_Wtime() - t0, Traffic::migration);
   return true;
 }
 

@@ -147,10 +147,7 @@ class Domain {
   }
 
   /// The rank that owns stripe s.
-  int owner(int s) const {
-    s = std::clamp(s, 0, stripes_ - 1);
-    return static_cast<int>(std::upper_bound(cuts_.begin(), cuts_.end(), s) - cuts_.begin()) - 1;
-  }
+  int owner(int s) const { return owner_[static_cast<std::size_t>(std::clamp(s, 0, stripes_ - 1))]; }
   int stripe_of_node(int first_node) const { return first_node / width_; }
 
   /// Moves every particle of set k whose first node along the axis (first_node(p)) lies in
@@ -245,6 +242,9 @@ class Domain {
 
   void set_cuts(std::vector<int> cuts) {
     cuts_ = std::move(cuts);
+    owner_.assign(static_cast<std::size_t>(stripes_), 0);
+    for (int r = 0; r < ranks(); ++r)
+      for (int s = cuts_[static_cast<std::size_t>(r)]; s < cuts_[static_cast<std::size_t>(r) + 1]; ++s) owner_[static_cast<std::size_t>(s)] = r;
     exchange_ = std::make_unique<StripeExchange>(nodes_, axis_, width_, support_, cuts_);
   }
 
@@ -264,6 +264,7 @@ class Domain {
   int axis_ = 0, width_ = 1, support_ = 1, stripes_ = 1;
   std::array<int, 3> nodes_{1, 1, 1};
   std::vector<int> cuts_;
+  std::vector<int> owner_;  // per stripe: its rank
   std::unique_ptr<StripeExchange> exchange_;
   std::vector<FieldBytes> layouts_;
   std::vector<int> dest_;
