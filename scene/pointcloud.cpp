@@ -124,6 +124,17 @@ void configure(Writer* writer, VtuCompression compression) {
   }
 }
 
+/// Runs the writer; a failure (VTK's error code, read instead of its stderr) as one WriteError.
+template <class Writer>
+void write_checked(Writer* writer, const std::string& path, const char* what) {
+  const int ok = writer->Write();
+  const unsigned long code = writer->GetErrorCode();
+  if (ok != 1 || code != vtkErrorCode::NoError)
+    throw files::WriteError(path, code == vtkErrorCode::OutOfDiskSpaceError
+                                      ? std::string("No space left on device (or past the file size limit)")
+                                      : std::string(what) + " failed (" + vtkErrorCode::GetStringFromErrorCode(code) + ")");
+}
+
 void write_unstructured(const std::string& path, const PointCloud& cloud, const Cells& c, VtuCompression compression) {
   auto grid = as_grid(path, cloud, c);
   auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
@@ -131,13 +142,7 @@ void write_unstructured(const std::string& path, const PointCloud& cloud, const 
   configure(writer.Get(), compression);
   files::write_atomically(path, [&](const std::string& temporary) {
     writer->SetFileName(temporary.c_str());
-    const int ok = writer->Write();
-    const unsigned long code = writer->GetErrorCode();
-    if (ok != 1 || code != vtkErrorCode::NoError)
-      throw files::WriteError(path, code == vtkErrorCode::OutOfDiskSpaceError
-                                        ? std::string("No space left on device (or past the file size limit)")
-                                        : std::string("the VTU writer failed (") +
-                                              vtkErrorCode::GetStringFromErrorCode(code) + ")");
+    write_checked(writer.Get(), path, "the VTU writer");
     // The stream's last buffer reaches the file when it is closed, after the writer's checks: a
     // complete VTU ends with its closing tag.
     std::ifstream back(temporary, std::ios::binary | std::ios::ate);
@@ -167,13 +172,7 @@ void write_pvtu_piece(const std::string& path, const PointCloud& cloud, int piec
   // Every rank takes part in the summary (VTK's global controller gathers which pieces exist);
   // rank 0 writes it.
   writer->SetWriteSummaryFile(1);
-  const int ok = writer->Write();
-  const unsigned long code = writer->GetErrorCode();
-  if (ok != 1 || code != vtkErrorCode::NoError)
-    throw files::WriteError(path, code == vtkErrorCode::OutOfDiskSpaceError
-                                      ? std::string("No space left on device (or past the file size limit)")
-                                      : std::string("the parallel VTU writer failed (") +
-                                            vtkErrorCode::GetStringFromErrorCode(code) + ")");
+  write_checked(writer.Get(), path, "the parallel VTU writer");
 }
 
 std::string pvtu_piece_name(const std::string& pvtu_name, int piece) {
