@@ -330,12 +330,24 @@ class Runner {
       if (tty_) std::fprintf(stderr, "\r%*s\r", 90, "");
       finish();
     } catch (const files::WriteError& e) {
+      // On several ranks only a failure every rank saw (a frame's pieces) ends the run in order;
+      // a file rank 0 alone writes (log, monitors, results.pvd) stops every rank at once.
+      if (parallel::distributed() && !all_ranks_failed_) {
+        log_.failure("rank " + std::to_string(parallel::rank()) + ": " + e.what());
+        parallel::abort(5);
+      }
       diagnosis_ = diagnosis_.empty() ? e.what() : diagnosis_ + "; then " + e.what();
       status_ = "failed";
       log_.failure(std::string("FAILED: ") + e.what() + "; the run stops here. " +
                    (frames_.empty() ? std::string("No frame is complete")
                                     : "The last complete frame is t = " + fmt(frames_.back().time) + " s") +
                    " (step " + std::to_string(state_.step) + ")");
+    } catch (const std::exception& e) {
+      // On several ranks a failure of one rank inside the loop (the others wait for it in a
+      // collective) stops them all: one line naming the rank, then MPI_Abort.
+      if (!parallel::distributed()) throw;
+      log_.failure("rank " + std::to_string(parallel::rank()) + ": " + e.what());
+      parallel::abort(1);
     }
     return report(wall_start);
   }
@@ -743,10 +755,23 @@ class Runner {
       fluid.points.resize(state_.fluid.size());
       f_->add_point_fields(state_, solid, fluid);
       if (parallel::distributed()) {
-        parallel::barrier();  // rank 0 has claimed the pieces' names
-        scene::write_pvtu_piece(pieces("solid", 0), solid, parallel::rank(), R, compression_);
-        if (fluid_set) scene::write_pvtu_piece(pieces("fluid", 1), fluid, parallel::rank(), R, compression_);
-        parallel::barrier();  // every piece is complete before results.pvd lists the frame
+        // Rank 0 claims every piece's name on the ledger before any rank writes one; a rank that
+        // cannot write its piece fails the frame on every rank (the others would wait for it).
+        const std::string solid_file = pieces("solid", 0);
+        const std::string fluid_file = fluid_set ? pieces("fluid", 1) : std::string();
+        parallel::barrier();
+        std::exception_ptr failed;
+        try {
+          scene::write_pvtu_piece(solid_file, solid, parallel::rank(), R, compression_);
+          if (fluid_set) scene::write_pvtu_piece(fluid_file, fluid, parallel::rank(), R, compression_);
+        } catch (const files::WriteError&) {
+          failed = std::current_exception();
+        }
+        if (parallel::any(failed != nullptr)) {
+          all_ranks_failed_ = true;
+          if (failed) std::rethrow_exception(failed);
+          throw files::WriteError(solid_file, "another rank could not write its piece");
+        }
       } else {
         scene::write_vtu(file("solid", 0), solid, compression_);
         if (fluid_set) scene::write_vtu(file("fluid", 1), fluid, compression_);
@@ -1211,6 +1236,7 @@ class Runner {
   double checkpoint_seconds_ = 0.0;  // wall time spent writing restart checkpoints (part of loop_seconds)
   int checkpoints_ = 0;
   bool checkpoint_skipped_ = false;
+  bool all_ranks_failed_ = false;  // mpirun: a write error every rank knows of (write_frame)
   double last_good_frame_time_ = 0.0;
 };
 

@@ -6,6 +6,8 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <cstddef>
+#include <new>
 #include <type_traits>
 
 namespace swmpm::parallel {
@@ -131,7 +133,8 @@ void StripeExchange::after_colour(int colour, void* nodes, std::size_t bytes) co
 // ---- particle migration --------------------------------------------------------------------------
 
 template <int Dim>
-bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout, Reorder<Dim>& reorder) {
+bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout,
+                    std::vector<std::max_align_t>& scratch) {
   const double t0 = MPI_Wtime();
   const int R = ranks(), me = rank();
   const std::size_t n = ps.size();
@@ -194,29 +197,73 @@ bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const Fi
     add_communication_seconds(MPI_Wtime() - t0, Traffic::migration);
     return false;
   }
-  if (sent > 0) compact(ps, keep, layout);
-  const std::size_t n_keep = ps.size(), n_new = n_keep + static_cast<std::size_t>(received);
+  // The new set in key order (the one-rank run's storage order), in one pass per field: the kept
+  // particles are in key order already, each rank's arrivals too; their keys merge.
+  if (sent == 0) {
+    keep.resize(n);
+    std::iota(keep.begin(), keep.end(), 0);
+  }
+  // Where each field of an arrival starts in `in` (field-major per source rank).
+  std::vector<std::size_t> field_at;  // per active field: bytes of the active fields before it
+  std::size_t key_at = 0;
   {
-    std::size_t k = 0;
-    std::vector<std::size_t> at(recv_displ.begin(), recv_displ.end());
+    std::size_t k = 0, before = 0;
+    ps.for_each_field([&](auto& f) {
+      if (!layout.active[k++]) return;
+      field_at.push_back(before);
+      if (static_cast<const void*>(&f) == static_cast<const void*>(&ps.key)) key_at = before;
+      before += sizeof(f[0]);
+    });
+  }
+  struct Arrival {
+    std::int64_t key;
+    int source, index;
+  };
+  std::vector<Arrival> arrivals;
+  arrivals.reserve(static_cast<std::size_t>(received));
+  for (int r = 0; r < R; ++r)
+    for (int i = 0; i < recv_n[static_cast<std::size_t>(r)]; ++i) {
+      std::int64_t key;
+      std::memcpy(&key, in.data() + recv_displ[static_cast<std::size_t>(r)] +
+                            static_cast<std::size_t>(recv_n[static_cast<std::size_t>(r)]) * key_at + static_cast<std::size_t>(i) * sizeof(key),
+                  sizeof(key));
+      arrivals.push_back({key, r, i});
+    }
+  std::sort(arrivals.begin(), arrivals.end(), [](const Arrival& a, const Arrival& b) { return a.key < b.key; });
+  // order[j] >= 0: the kept particle of that index; < 0: arrival -order[j] - 1.
+  const std::size_t n_new = keep.size() + arrivals.size();
+  std::vector<int> order(n_new);
+  {
+    std::size_t a = 0, b = 0;
+    for (std::size_t j = 0; j < n_new; ++j) {
+      const bool take_kept = b == arrivals.size() ||
+                             (a < keep.size() && ps.key[static_cast<std::size_t>(keep[a])] < arrivals[b].key);
+      order[j] = take_kept ? keep[a++] : -static_cast<int>(b++) - 1;
+    }
+  }
+  {
+    std::size_t k = 0, f_index = 0;
     ps.for_each_field([&](auto& f) {
       if (!layout.active[k++]) return;
       using T = typename std::decay_t<decltype(f)>::value_type;
-      f.resize(n_new);
-      std::size_t pos = n_keep;
-      for (int r = 0; r < R; ++r)
-        for (int j = 0; j < recv_n[static_cast<std::size_t>(r)]; ++j) {
-          std::memcpy(static_cast<void*>(&f[pos++]), in.data() + at[static_cast<std::size_t>(r)], sizeof(T));
-          at[static_cast<std::size_t>(r)] += sizeof(T);
+      const std::size_t offset = field_at[f_index++];
+      const std::size_t words = (n_new * sizeof(T) + sizeof(std::max_align_t) - 1) / sizeof(std::max_align_t);
+      if (scratch.size() < words) scratch.resize(words);
+      T* tmp = reinterpret_cast<T*>(scratch.data());
+      for (std::size_t j = 0; j < n_new; ++j) {
+        if (order[j] >= 0) {
+          new (tmp + j) T(f[static_cast<std::size_t>(order[j])]);
+        } else {
+          const Arrival& a = arrivals[static_cast<std::size_t>(-order[j] - 1)];
+          const std::size_t r = static_cast<std::size_t>(a.source);
+          std::memcpy(static_cast<void*>(tmp + j),
+                      in.data() + recv_displ[r] + static_cast<std::size_t>(recv_n[r]) * offset + static_cast<std::size_t>(a.index) * sizeof(T),
+                      sizeof(T));
         }
+      }
+      f.resize(n_new);
+      std::copy(tmp, tmp + n_new, f.begin());
     });
-  }
-  // Back to key order (the one-rank run's storage order).
-  if (!std::is_sorted(ps.key.begin(), ps.key.end())) {
-    std::vector<int> order(n_new);
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return ps.key[static_cast<std::size_t>(a)] < ps.key[static_cast<std::size_t>(b)]; });
-    reorder.apply(ps, order);
   }
   add_communication_seconds(MPI_Wtime() - t0, Traffic::migration);
   return true;
@@ -236,13 +283,13 @@ ParticleSet<Dim> gather_set(const ParticleSet<Dim>& ps) {
   all.for_each_field([&, k = std::size_t{0}](auto& f) mutable {
     if (layout.active[k++] && f.size() != n) f.resize(n);
   });
-  Reorder<Dim> reorder;
-  move_particles(all, std::vector<int>(n, 0), layout, reorder);
+  std::vector<std::max_align_t> scratch;
+  move_particles(all, std::vector<int>(n, 0), layout, scratch);
   return all;
 }
 
-template bool move_particles<2>(ParticleSet<2>&, const std::vector<int>&, const FieldBytes&, Reorder<2>&);
-template bool move_particles<3>(ParticleSet<3>&, const std::vector<int>&, const FieldBytes&, Reorder<3>&);
+template bool move_particles<2>(ParticleSet<2>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&);
+template bool move_particles<3>(ParticleSet<3>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&);
 template ParticleSet<2> gather_set<2>(const ParticleSet<2>&);
 template ParticleSet<3> gather_set<3>(const ParticleSet<3>&);
 

@@ -26,6 +26,7 @@
 #include <algorithm>
 #include <cmath>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <memory>
@@ -80,9 +81,12 @@ void compact(ParticleSet<Dim>& ps, const std::vector<int>& keep, const FieldByte
 }
 
 /// Moves particle p of `ps` to rank dest[p] (the fields `layout` marks), in one all-to-all;
-/// the set is then in key order. Collective. Returns whether this rank's set changed.
+/// the set is then in key order (the kept particles and each rank's arrivals are; their keys are
+/// merged, and each field is rebuilt in one pass through `scratch`, kept by the caller). Collective.
+/// Returns whether this rank's set changed.
 template <int Dim>
-bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout, Reorder<Dim>& reorder);
+bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout,
+                    std::vector<std::max_align_t>& scratch);
 
 /// Every rank's particles of a set, on rank 0, in key order: the one-rank run's set in its storage
 /// order (the others get an empty set). Collective. For what is measured once per frame over the
@@ -258,7 +262,7 @@ class Domain {
   }
 
   bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout) {
-    return parallel::move_particles(ps, dest, layout, reorder_);
+    return parallel::move_particles(ps, dest, layout, scratch_);
   }
 
   int axis_ = 0, width_ = 1, support_ = 1, stripes_ = 1;
@@ -268,7 +272,7 @@ class Domain {
   std::unique_ptr<StripeExchange> exchange_;
   std::vector<FieldBytes> layouts_;
   std::vector<int> dest_;
-  Reorder<Dim> reorder_;
+  std::vector<std::max_align_t> scratch_;  // migration's rebuild of each field
   int rebalances_ = 0;
   long migrated_ = 0;  // this rank's particles sent away
 };

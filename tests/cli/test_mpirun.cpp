@@ -17,7 +17,8 @@ namespace {
 Result mpirun(int n, const std::string& args, const fs::path& dir) {
   const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
   // `timeout`: a rank that waits for ever in a collective fails the test instead of hanging CI.
-  const std::string cmd = "timeout 300 env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 " +
+  const std::string cmd = "timeout 300 env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+                          "OMPI_MCA_mpi_yield_when_idle=1 " +
                           std::string(SWMPM_MPIEXEC) + " -n " + std::to_string(n) + " " + SWMPM_EXE + " " + args +
                           " > " + out + " 2> " + err;
   const int raw = std::system(cmd.c_str());
