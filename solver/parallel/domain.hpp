@@ -106,15 +106,15 @@ class Domain {
   const std::vector<int>& cuts() const { return cuts_; }
   const NodeExchange* exchange() const { return exchange_.get(); }
 
-  /// The decomposition of grid `g` for shape functions of `support` nodes per axis, with the cuts
-  /// balanced on `sets` (the whole run's particles, which every rank holds at the start). Each
-  /// rank then keeps its own particles (keys: their index in the whole set).
+  /// The decomposition of grid `g` along the scatter schedule's stripe axis (transfer::stripe_axis)
+  /// for shape functions of `support` nodes per axis, with the cuts balanced on `sets` (the whole
+  /// run's particles, which every rank holds at the start). Each rank then keeps its own particles
+  /// (keys: their index in the whole set).
   template <class FirstNode>
-  void distribute(const Grid<Dim>& g, int support, std::vector<ParticleSet<Dim>*> sets, FirstNode&& first_node) {
+  void distribute(const Grid<Dim>& g, int support, int axis, std::vector<ParticleSet<Dim>*> sets,
+                  FirstNode&& first_node) {
     if (!active()) return;
-    axis_ = 0;
-    for (int a = 1; a < Dim; ++a)
-      if (g.nodes_per_axis()[a] > g.nodes_per_axis()[axis_]) axis_ = a;  // transfer::stripe_axis
+    axis_ = axis;
     width_ = support;
     support_ = support;
     nodes_.fill(1);

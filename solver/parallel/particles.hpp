@@ -30,7 +30,7 @@ template <class Shape, int Dim>
 void distribute(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedule& schedule) {
   if (ranks() == 1) return;
   const int axis = transfer::stripe_axis(g);
-  d.distribute(g, Shape::support, {&st.solid}, [&](std::size_t, std::size_t p) {
+  d.distribute(g, Shape::support, axis, {&st.solid}, [&](std::size_t, std::size_t p) {
     return first_node<Shape>(g, st.solid.x[p], st.solid.l[p], axis);
   });
   schedule.set_exchange(d.exchange());

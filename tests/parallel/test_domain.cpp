@@ -65,7 +65,7 @@ TEST(Domain, SharedColumnsGetTheOneRankSumBitForBit) {
   ParticleSet<2> mine = all;
   Domain<2> d;
   const int axis = transfer::stripe_axis(g);
-  d.distribute(g, S, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
+  d.distribute(g, S, axis, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
   EXPECT_EQ(sum(static_cast<long>(mine.size())), 4000);
   EXPECT_TRUE(std::is_sorted(mine.key.begin(), mine.key.end()));
   StripeSchedule schedule;
@@ -100,7 +100,7 @@ TEST(Domain, MigrationMovesWholeParticlesToTheirStripesInKeyOrder) {
   Domain<2> d;
   const int axis = transfer::stripe_axis(g);
   auto first = [&](std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); };
-  d.distribute(g, S, {&mine}, [&](std::size_t, std::size_t p) { return first(p); });
+  d.distribute(g, S, axis, {&mine}, [&](std::size_t, std::size_t p) { return first(p); });
   // Everything slides 0.9 m to the right: most points change rank.
   for (auto& x : mine.x) x[0] = std::min(x[0] + 0.9, 2.95);
   const long before = sum(static_cast<long>(mine.size()));
@@ -130,7 +130,7 @@ TEST(Domain, GatherSetGivesRankZeroTheWholeSetInTheOneRankOrder) {
   ParticleSet<2> mine = cloud(2000);
   Domain<2> d;
   const int axis = transfer::stripe_axis(g);
-  d.distribute(g, S, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
+  d.distribute(g, S, axis, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
   const ParticleSet<2> whole = gather_set(mine);
   if (rank() != 0) {
     EXPECT_EQ(whole.size(), 0u);
