@@ -501,16 +501,13 @@ class Runner {
 
   bool root() const { return parallel::rank() == 0; }
 
-  /// mpirun: a scene whose formulation (or one of its options) does not run on several ranks yet,
-  /// and --resume (a checkpoint holds one rank's particles), are refused before anything is written.
+  /// mpirun: a scene whose formulation (or one of its options) does not run on several ranks yet
+  /// is refused before anything is written.
   void refuse_what_cannot_run_on_several_ranks() const {
     const std::string file = (dir_ / "scene.json").string();
     if (std::string why = f_->on_several_ranks(scene_); !why.empty())
       throw scene::SceneError({file + ": " + why + "; run it without mpirun (" + std::to_string(parallel::ranks()) +
                                " ranks asked)"});
-    if (opt_.resume)
-      throw CheckpointError((dir_ / "checkpoint.bin").string() +
-                            ": --resume does not run on several ranks yet; resume without mpirun");
   }
 
   /// The diagnosis of a failed step: the failing rank's (the lowest one's, mpirun), on every rank.
@@ -835,6 +832,31 @@ class Runner {
     f_->save(c);
   }
 
+  /// mpirun: the snapshot of the whole run on rank 0, as the one-rank run takes it: each set
+  /// gathered in key order (the one-rank storage order), each particle order of the formulation's
+  /// state (Checkpoint::put_order) as positions in its gathered set. The other ranks get the
+  /// header only. Collective.
+  void take_whole_snapshot(Checkpoint& c) const {
+    Checkpoint mine;
+    take_snapshot(mine);
+    const ParticleSet<Dim> solid = parallel::gather_set(state_.solid), fluid = parallel::gather_set(state_.fluid);
+    c.clear();
+    c.header = mine.header;
+    c.header.erase("particle_orders");
+    save_set(c, "solid", solid);
+    save_set(c, "fluid", fluid);
+    const auto orders = mine.header.value("particle_orders", nlohmann::ordered_json::object());
+    for (const auto& name : mine.names()) {
+      if (name.rfind("solid/", 0) == 0 || name.rfind("fluid/", 0) == 0) continue;
+      if (!orders.contains(name))  // grid arrays of a formulation: not on several ranks yet
+        throw std::logic_error(f_->name() + ": its restart array " + name + " does not gather across ranks yet");
+      const bool water = orders.at(name) == "fluid";
+      std::vector<int> order;
+      mine.get(name, order);
+      c.put_order(name, orders.at(name), parallel::gather_order(order, water ? state_.fluid : state_.solid, (water ? fluid : solid).key));
+    }
+  }
+
   /// Puts a snapshot's particle sets and formulation state in place (the clock is the caller's).
   void restore_snapshot(const Checkpoint& c) {
     restore_set(c, "solid", state_.solid);
@@ -844,15 +866,13 @@ class Runner {
   }
 
   /// RUN_DIR/checkpoint.bin (solver/output/checkpoint.hpp), replaced atomically.
+  /// Under mpirun rank 0 writes it, holding the whole run as one rank would (take_whole_snapshot),
+  /// so that it resumes on any number of ranks.
   void write_checkpoint() {
-    if (parallel::distributed()) {  // a checkpoint holds one rank's particles: not yet under mpirun
-      if (!checkpoint_skipped_) log_.line("restart checkpoints are not written on several ranks yet (mpirun)");
-      checkpoint_skipped_ = true;
-      return;
-    }
     const auto start = std::chrono::steady_clock::now();
     Checkpoint c;
-    take_snapshot(c);
+    if (parallel::distributed()) take_whole_snapshot(c);
+    else take_snapshot(c);
     c.header["software_version"] = version;
     c.header["git_hash"] = git_hash;
     c.header["formulation"] = f_->name();
@@ -869,8 +889,24 @@ class Runner {
     loop["monitor_bytes"] = monitors_->bytes();
     loop["stability"] = stability_.json();
     c.header["loop"] = loop;
-    run_dir_.claim("checkpoint.bin");
-    c.write(dir_ / "checkpoint.bin");
+    if (parallel::distributed()) {
+      // Rank 0 writes; a failure stops every rank in order (as a frame's piece does).
+      std::exception_ptr failed;
+      if (root()) try {
+          run_dir_.claim("checkpoint.bin");
+          c.write(dir_ / "checkpoint.bin");
+        } catch (const files::WriteError&) {
+          failed = std::current_exception();
+        }
+      if (parallel::any(failed != nullptr)) {
+        all_ranks_failed_ = true;
+        if (failed) std::rethrow_exception(failed);
+        throw files::WriteError((dir_ / "checkpoint.bin").string(), "rank 0 could not write it");
+      }
+    } else {
+      run_dir_.claim("checkpoint.bin");
+      c.write(dir_ / "checkpoint.bin");
+    }
     checkpoint_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++checkpoints_;
   }
@@ -920,6 +956,7 @@ class Runner {
     state_.step = c.header.at("step");
     state_.time = c.header.at("time");
     restore_snapshot(c);
+    f_->distribute(state_);  // mpirun: each rank keeps its share of the checkpoint's particles
     guard_.restore(l);
     next_frame_ = l.at("next_frame"), next_monitor_ = l.at("next_monitor"), next_restart_ = l.at("next_restart");
     frame_count_ = l.at("frame_count");
@@ -927,9 +964,10 @@ class Runner {
     frames_.clear();
     for (const auto& e : l.at("frames"))
       frames_.push_back({e.at(0).get<double>(), e.at(1).get<std::string>(), e.at(2).get<int>(), e.at(3).get<std::string>()});
-    last_good_ = c;  // the checkpoint is a good state
+    if (parallel::distributed()) take_snapshot(last_good_);  // the checkpoint is a good state (this rank's share)
+    else last_good_ = c;
     last_good_time_ = state_.time;
-    scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);  // without the frames after it
+    if (root()) scene::write_pvd((dir_ / "output" / "results.pvd").string(), frames_);  // without the frames after it
     log_.line("resumed from the checkpoint at step " + std::to_string(state_.step) + ", t = " + fmt(state_.time, 10) +
               " s (" + std::to_string(frame_count_) + " frames kept)");
     first_step_ = state_.step;
@@ -1235,7 +1273,6 @@ class Runner {
   double frame_seconds_ = 0.0;      // wall time spent writing frames (part of loop_seconds)
   double checkpoint_seconds_ = 0.0;  // wall time spent writing restart checkpoints (part of loop_seconds)
   int checkpoints_ = 0;
-  bool checkpoint_skipped_ = false;
   bool all_ranks_failed_ = false;  // mpirun: a write error every rank knows of (write_frame)
   double last_good_frame_time_ = 0.0;
 };

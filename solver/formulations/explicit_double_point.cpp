@@ -298,7 +298,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
   /// initialisation's partners; every nodal field is rebuilt by each step from the points.
   void save(Checkpoint& c) const override {
     save_order(c, "formulation/schedule_order", schedule_);
-    save_order(c, "formulation/water_schedule_order", wschedule_);
+    save_order(c, "formulation/water_schedule_order", wschedule_, "fluid");
     c.put("formulation/partner", partner_);
   }
   void restore(const Checkpoint& c, State<Dim>& st) override {

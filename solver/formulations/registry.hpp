@@ -93,9 +93,10 @@ bool reorder_for_locality(State<Dim>& st, const StripeSchedule& schedule, Reorde
 }
 
 /// Restart: the schedule order the next step's reordering reads (reorder_for_locality), saved and
-/// restored under `name`.
-inline void save_order(Checkpoint& c, const std::string& name, const StripeSchedule& schedule) {
-  c.put(name, schedule.order());
+/// restored under `name`; `set` names the particle set it orders ("solid" or "fluid").
+inline void save_order(Checkpoint& c, const std::string& name, const StripeSchedule& schedule,
+                       const std::string& set = "solid") {
+  c.put_order(name, set, schedule.order());
 }
 inline void restore_order(const Checkpoint& c, const std::string& name, StripeSchedule& schedule) {
   std::vector<int> order;

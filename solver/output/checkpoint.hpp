@@ -48,6 +48,19 @@ class Checkpoint {
     if (s.count) std::memcpy(static_cast<void*>(v.data()), data_.data() + s.offset, s.count * sizeof(T));
   }
   bool has(const std::string& name) const;
+  /// A particle order (indices into the particle set `set`, as a scatter schedule's): stored as
+  /// put() does and marked in the header ("particle_orders"), so that a run on several ranks can
+  /// gather it with its set into the one-rank run's order (parallel::gather_order).
+  void put_order(const std::string& name, const std::string& set, const std::vector<int>& order) {
+    put(name, order);
+    header["particle_orders"][name] = set;
+  }
+  /// The names of the arrays, in the order they were put.
+  std::vector<std::string> names() const {
+    std::vector<std::string> n;
+    for (const auto& s : sections_) n.push_back(s.name);
+    return n;
+  }
   /// Empties the checkpoint, keeping its memory (the loop's in-memory snapshot is refilled in place).
   void clear() {
     header = nlohmann::ordered_json::object();

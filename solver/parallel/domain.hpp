@@ -94,6 +94,27 @@ bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const Fi
 template <int Dim>
 ParticleSet<Dim> gather_set(const ParticleSet<Dim>& ps);
 
+/// A particle order of this rank's set `ps` (indices into it, as its scatter schedule's), as one
+/// order of the whole set that gather_set builds: on rank 0, each rank's entries in rank order,
+/// as positions in the whole set (`whole_keys`: its keys, increasing); empty on the other ranks.
+/// The restart file's form of a schedule order, as the one-rank run stores it. Collective.
+template <int Dim>
+std::vector<int> gather_order(const std::vector<int>& order, const ParticleSet<Dim>& ps,
+                              const std::vector<std::int64_t>& whole_keys);
+
+/// The inverse on a resume: an order of the whole set (positions in it) restricted to the
+/// particles this rank kept (`keys`: their positions in the whole set, increasing), as indices
+/// into the rank's set.
+inline std::vector<int> local_order(const std::vector<int>& whole_order, const std::vector<std::int64_t>& keys) {
+  std::vector<int> local;
+  local.reserve(keys.size());
+  for (int g : whole_order) {
+    const auto it = std::lower_bound(keys.begin(), keys.end(), std::int64_t{g});
+    if (it != keys.end() && *it == g) local.push_back(static_cast<int>(it - keys.begin()));
+  }
+  return local;
+}
+
 template <int Dim>
 class Domain {
  public:

@@ -24,15 +24,18 @@ int first_node(const Grid<Dim>& g, const Vec<Dim>& x, const Vec<Dim>& l, int axi
   return sd.base[axis];
 }
 
-/// A fresh run's start under mpirun: every rank read all particles; each keeps its own, and the
-/// schedule learns the exchange. Nothing at one rank.
+/// A run's start under mpirun: every rank read all particles (a fresh run's, or a checkpoint's
+/// with the schedule order restored for the whole set); each keeps its own and the part of the
+/// order that indexes them, and the schedule learns the exchange. Nothing at one rank.
 template <class Shape, int Dim>
 void distribute(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedule& schedule) {
   if (ranks() == 1) return;
   const int axis = transfer::stripe_axis(g);
+  const std::size_t whole = st.solid.size();
   d.distribute(g, Shape::support, axis, {&st.solid}, [&](std::size_t, std::size_t p) {
     return first_node<Shape>(g, st.solid.x[p], st.solid.l[p], axis);
   });
+  if (schedule.built() && schedule.order().size() == whole) schedule.restore_order(local_order(schedule.order(), st.solid.key));
   schedule.set_exchange(d.exchange());
   st.index_ids();
 }

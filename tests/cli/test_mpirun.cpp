@@ -180,6 +180,55 @@ TEST(Mpirun, DryCollapseOnFourOversubscribedRanksIsBitwiseTheOneRankRun) {
   EXPECT_EQ(load_json(p.many + "/run.json")["particles_per_rank"]["each"].size(), 4u);
 }
 
+/// The final frame of `run` (the last entry of results.pvd).
+scene::PointCloud last_frame(const std::string& run) {
+  const auto frames = scene::read_pvd(run + "/output/results.pvd");
+  EXPECT_FALSE(frames.empty());
+  return scene::read_vtu(run + "/output/" + frames.back().file);
+}
+
+TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
+  // A fixed dt puts the last checkpoint (t = 0.275 s, step 1100) just before a step that stores
+  // the particles in schedule order (every 10 steps): the restored schedule order is used at once.
+  nlohmann::json s = column_collapse(2, "bspline2");
+  s["time"]["dt"] = 2.5e-4;
+  s["output"]["checkpoint_interval"] = 0.1375;
+  const fs::path dir = scratch("mpirun-restart");
+  std::ofstream(dir / "scene.json") << s.dump(2);
+  const std::string one = (dir / "one").string(), run = (dir / "run").string();
+  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + one + " -q", dir).status, 0);
+  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run + " -q", dir).status, 0);
+  ASSERT_EQ(swmpm_cmd("solve " + one + " -q --threads 1", dir).status, 0);
+  const auto reference = last_frame(one);
+  const std::string monitors = read_text(one + "/monitors.csv");
+
+  // Two ranks to the end: the last checkpoint (t = 0.275 s) holds the whole run, rank 0 wrote it.
+  const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
+  ASSERT_EQ(two.status, 0) << two.err;
+  EXPECT_EQ(load_json(run + "/run.json")["checkpoints"], 2);
+  // 2 -> 1: the one-rank resume of the two ranks' checkpoint ends on the one-rank run's answers.
+  const Result r1 = swmpm_cmd("solve " + run + " --resume -q --threads 1", dir);
+  ASSERT_EQ(r1.status, 0) << r1.err;
+  auto rj = load_json(run + "/run.json");
+  EXPECT_EQ(rj["resumed_from_step"], 1100);
+  EXPECT_EQ(rj["ranks"], 1);
+  EXPECT_EQ(differing_values(reference, last_frame(run)), 0);
+  EXPECT_EQ(read_text(run + "/monitors.csv"), monitors);
+  // 1 -> 3: that run's last checkpoint (one rank's) resumes on three ranks, the same again.
+  const Result r3 = mpirun(3, "solve " + run + " --resume -q --threads 1", dir);
+  ASSERT_EQ(r3.status, 0) << r3.err;
+  rj = load_json(run + "/run.json");
+  EXPECT_EQ(rj["resumed_from_step"], 1100);
+  EXPECT_EQ(rj["ranks"], 3);
+  EXPECT_EQ(rj["particles_per_rank"]["each"].size(), 3u);
+  const auto frames = scene::read_pvd(run + "/output/results.pvd");
+  ASSERT_FALSE(frames.empty());
+  EXPECT_EQ(frames.back().file.substr(frames.back().file.size() - 5), ".pvtu");
+  EXPECT_EQ(differing_values(reference, last_frame(run)), 0);
+  EXPECT_EQ(read_text(run + "/monitors.csv"), monitors);
+  EXPECT_EQ(scene::read_pvd(one + "/output/results.pvd").size(), frames.size());
+}
+
 TEST(Mpirun, AFormulationNotYetOnSeveralRanksIsRefusedBeforeAnythingIsWritten) {
   nlohmann::json s = column_collapse(2, "bspline2");
   s["solver"]["stabilisation"] = {{"fbar", "standard"}};

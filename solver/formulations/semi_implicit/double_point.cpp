@@ -128,7 +128,7 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
   /// (the loop completes them first), so nothing is stale after a restore.
   void save(Checkpoint& c) const override {
     this->save_core(c);
-    save_order(c, "formulation/water_schedule_order", wschedule_);
+    save_order(c, "formulation/water_schedule_order", wschedule_, "fluid");
     c.put("formulation/partner", partner_);
     c.header["formulation_state"] = {{"escaped_points", escaped_points_}, {"escaped_mass", escaped_mass_}};
   }
