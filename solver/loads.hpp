@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -88,12 +89,23 @@ class ParticleLoads {
   /// ids to current indices (State::index_of_id).
   template <class Fn>
   void for_each_force(double t, const std::vector<int>& index_of_id, Fn&& fn) const {
+    for_each_numbered_force(t, index_of_id, [&](std::int64_t, int p, const Vec<Dim>& f, const Vec<Dim>& offset,
+                                                bool split) { fn(p, f, offset, split); });
+  }
+  /// for_each_force with each force's place in the list of all loaded particles (every load's,
+  /// in order), fn(ordinal, p, f, offset, split): the order in which one rank adds them.
+  template <class Fn>
+  void for_each_numbered_force(double t, const std::vector<int>& index_of_id, Fn&& fn) const {
+    std::int64_t ordinal = 0;
     for (const auto& e : entries_) {
       const double scale = e.fn(t);
-      if (scale == 0.0) continue;
-      for (std::size_t k = 0; k < e.ids.size(); ++k)
+      if (scale == 0.0) {
+        ordinal += static_cast<std::int64_t>(e.ids.size());
+        continue;
+      }
+      for (std::size_t k = 0; k < e.ids.size(); ++k, ++ordinal)
         if (const int p = index_of_id[e.ids[k]]; p >= 0)  // -1: held by another rank (mpirun)
-          fn(p, (scale * e.force[k]).eval(), e.offset[k], e.split);
+          fn(ordinal, p, (scale * e.force[k]).eval(), e.offset[k], e.split);
     }
   }
   std::size_t count() const { return entries_.size(); }
@@ -131,8 +143,12 @@ template <int Dim, int S>
 struct FaceForce {
   shape::ShapeData<Dim, S> sd;  // shape functions at the face point
   Vec<Dim> f;                   // N (N/m in 2D)
-  int p;                        // particle index
+  int p;                        // particle index (-1: a particle another rank holds, mpirun)
   bool split;                   // shared between solid and fluid by porosity (ParticleLoads)
+  double n = 0.0;               // the particle's porosity (two-phase sets), for `split`
+  Vec<Dim> x = Vec<Dim>::Zero();  // m, the face point
+  std::int64_t ordinal = 0;     // its place in the list of all loaded particles (for_each_numbered_force)
+  double scale = 0.0;           // 1 / sum of N over its nodes that carry mass (weigh_face_forces)
 };
 
 /// The loads' forces at time t with their shape data, and the active node box grown to hold them
@@ -142,10 +158,13 @@ void collect_face_forces(const Grid<Dim>& g, const ParticleLoads<Dim>& loads, co
                          const std::vector<int>& index_of_id, double t, NodeBox<Dim>& box,
                          std::vector<FaceForce<Dim, Shape::support>>& out) {
   out.clear();
-  loads.for_each_force(t, index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>& offset, bool split) {
+  loads.for_each_numbered_force(t, index_of_id, [&](std::int64_t ordinal, int p, const Vec<Dim>& f_p,
+                                                    const Vec<Dim>& offset, bool split) {
     FaceForce<Dim, Shape::support> ff{{}, f_p, p, split};
-    const Vec<Dim> x_face = (ps.x[p] + offset).cwiseMax(g.min()).cwiseMin(g.max());
-    shape::evaluate<Shape>(g, x_face, Vec<Dim>::Zero().eval(), ff.sd);
+    ff.n = ps.n.empty() ? 0.0 : ps.n[p];
+    ff.x = (ps.x[p] + offset).cwiseMax(g.min()).cwiseMin(g.max());
+    ff.ordinal = ordinal;
+    shape::evaluate<Shape>(g, ff.x, Vec<Dim>::Zero().eval(), ff.sd);
     for (int a = 0; a < Dim; ++a) {
       box.lo[a] = std::min(box.lo[a], ff.sd.base[a]);
       box.hi[a] = std::max(box.hi[a], ff.sd.base[a] + Shape::support - 1);
@@ -160,16 +179,26 @@ void collect_face_forces(const Grid<Dim>& g, const ParticleLoads<Dim>& loads, co
 /// linear shape functions a particle sitting on a node leaves the next node up massless while its
 /// face point still weighs it 1/2 (A2 on linear, h = 0.025 m, lost half its top load). The force
 /// and its resultant are kept exactly; only where it acts moves to the loaded nodes.
-template <int Dim, int S, class HasMass, class Fn>
-void for_each_loaded_node(const Grid<Dim>& g, const FaceForce<Dim, S>& ff, HasMass&& has_mass, Fn&& fn) {
+/// The weights of the nodes take the sum in weigh_face_forces (called once the masses are
+/// scattered), so that under mpirun the rank that holds all of a face point's nodes can weigh it
+/// for every rank (parallel::weigh_face_forces).
+template <int Dim, int S, class HasMass>
+double face_force_scale(const Grid<Dim>& g, const FaceForce<Dim, S>& ff, HasMass&& has_mass) {
   double total = 0.0;
   shape::for_each_node(g, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) {
     if (has_mass(i)) total += N;
   });
-  if (!(total > 0.0)) return;  // no loaded node at all: the particle's own nodes hold its mass, so not reached
-  const double scale = 1.0 / total;
+  return total > 0.0 ? 1.0 / total : 0.0;  // 0: no loaded node at all (the particle's own nodes hold its mass, so not reached)
+}
+template <int Dim, int S, class HasMass>
+void weigh_face_forces(const Grid<Dim>& g, std::vector<FaceForce<Dim, S>>& ffs, HasMass&& has_mass) {
+  for (auto& ff : ffs) ff.scale = face_force_scale(g, ff, has_mass);
+}
+template <int Dim, int S, class HasMass, class Fn>
+void for_each_loaded_node(const Grid<Dim>& g, const FaceForce<Dim, S>& ff, HasMass&& has_mass, Fn&& fn) {
+  if (!(ff.scale > 0.0)) return;
   shape::for_each_node(g, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) {
-    if (has_mass(i)) fn(i, N * scale);
+    if (has_mass(i)) fn(i, N * ff.scale);
   });
 }
 

@@ -843,11 +843,18 @@ class Runner {
     c.clear();
     c.header = mine.header;
     c.header.erase("particle_orders");
+    c.header.erase("global_arrays");
     save_set(c, "solid", solid);
     save_set(c, "fluid", fluid);
     const auto orders = mine.header.value("particle_orders", nlohmann::ordered_json::object());
+    const auto global = mine.header.value("global_arrays", nlohmann::ordered_json::object());
     for (const auto& name : mine.names()) {
       if (name.rfind("solid/", 0) == 0 || name.rfind("fluid/", 0) == 0) continue;
+      if (global.contains(name)) {  // the same on every rank
+        c.copy_array(mine, name);
+        c.header["global_arrays"][name] = true;
+        continue;
+      }
       if (!orders.contains(name))  // grid arrays of a formulation: not on several ranks yet
         throw std::logic_error(f_->name() + ": its restart array " + name + " does not gather across ranks yet");
       const bool water = orders.at(name) == "fluid";

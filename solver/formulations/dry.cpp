@@ -64,16 +64,17 @@ class Dry final : public Formulation<Dim> {
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
     // Tractions act at the particles' face points (ParticleLoads).
     collect_face_forces<Shape>(grid_, loads_, ps, st.index_of_id, ctx.t, box_, face_forces_);
+    parallel::share_face_forces<Shape>(domain_, grid_, face_forces_, box_);  // mpirun: every rank's, in order
     lap("shape functions");
     transfer::build_schedule(grid_, sd_, schedule_);
     lap("schedule");
     transfer::clear_nodes(grid_, box_, nodes_);
 
     transfer::scatter_mass_momentum_force(grid_, schedule_, ps, sd_, b, nodes_);       // (2)
-    for (const auto& ff : face_forces_)                                             // (3)
-      for_each_loaded_node(
-          grid_, ff, [&](std::size_t i) { return nodes_.acc[i].m > transfer::empty_node_mass; },
-          [&](std::size_t i, double N) { nodes_.acc[i].f += N * ff.f; });
+    auto loaded = [&](std::size_t i) { return nodes_.acc[i].m > transfer::empty_node_mass; };      // (3)
+    parallel::weigh_face_forces(domain_, grid_, face_forces_, loaded);
+    for (const auto& ff : face_forces_)
+      for_each_loaded_node(grid_, ff, loaded, [&](std::size_t i, double N) { nodes_.acc[i].f += N * ff.f; });
     lap("p2g");
 
     update_grid(dt);                                                                    // (4)
@@ -146,7 +147,6 @@ class Dry final : public Formulation<Dim> {
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
   std::string on_several_ranks(const scene::Scene& s) const override {
     if (s.solver.stabilisation.fbar != "none") return "solver.stabilisation.fbar does not run on several ranks yet";
-    if (loads_.count() > 0) return "loads on particles do not run on several ranks yet";
     return {};
   }
   std::vector<typename Formulation<Dim>::Counter> counters() const override {

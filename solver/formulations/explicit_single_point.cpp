@@ -31,6 +31,7 @@
 #include "solver/formulations/registry.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/parallel/particles.hpp"
 #include "solver/porous/drag.hpp"
 #include "solver/porous/permeability.hpp"
 #include "solver/porous/points.hpp"
@@ -108,26 +109,33 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
     StageClock lap(this->times_);
 
-    if (reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval)) lap("reorder");  // (0)
+    if (reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval, &domain_))
+      lap("reorder");  // (0)
 
     long bad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);
+    // Under mpirun: particles that crossed a cut move to their rank; the rank's node box.
+    if (parallel::own_particles<Shape>(domain_, grid_, st, schedule_, sd_, box_, bad))
+      regroup_by_material(ps, material_particles_);
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
     collect_face_forces<Shape>(grid_, loads_, ps, st.index_of_id, ctx.t, box_, face_forces_);
+    parallel::share_face_forces<Shape>(domain_, grid_, face_forces_, box_);  // mpirun: every rank's, in order
     transfer::build_schedule(grid_, sd_, schedule_);
     clear_nodes();
     lap("shape functions");
 
-    if (cell_pressure_) cells_.project(grid_, schedule_, ps, [&](int p) { return pore_[ps.material[p]].K_f; });  // (1b)
+    if (cell_pressure_) cells_.project(grid_, box_, schedule_, ps, [&](int p) { return pore_[ps.material[p]].K_f; });  // (1b)
     if (conservative_) nodal_porosity(ps);                                               // (1c)
     if (cell_pressure_ || conservative_) lap("cell pressure and nodal porosity");
 
     scatter_both_phases(ps, b);                                                          // (2)
+    auto loaded = [&](std::size_t i) { return solid_.acc[i].m > transfer::empty_node_mass; };
+    parallel::weigh_face_forces(domain_, grid_, face_forces_, loaded);
     for (const auto& ff : face_forces_) {
       // A prescribed pore pressure (split) loads both phases, (1 - n) and n of -p A n.
-      const double to_fluid = ff.split ? ps.n[ff.p] : 0.0;
+      const double to_fluid = ff.split ? ff.n : 0.0;
       for_each_loaded_node(
-          grid_, ff, [&](std::size_t i) { return solid_.acc[i].m > transfer::empty_node_mass; },
+          grid_, ff, loaded,
           [&](std::size_t i, double N) {
             solid_.acc[i].f += (N * (1.0 - to_fluid)) * ff.f;
             fluid_.acc[i].f += (N * to_fluid) * ff.f;
@@ -146,7 +154,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     lap("g2p + musl remap");
 
     strain_rates(ps);                                                                    // (6)
-    if (smoothing_) smoothing_stage_.apply(grid_, ps, div_f_);                           // eqs. 26-27
+    if (smoothing_) smoothing_stage_.apply(grid_, box_, schedule_, ps, div_f_);         // eqs. 26-27
     lap("strain rates");
 
     bad = update_volumes(ps, dt);                                                        // (8)
@@ -184,6 +192,8 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     const long n = static_cast<long>(ps.size());
 #pragma omp parallel for reduction(max : v_max) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) v_max = std::max(v_max, std::max(ps.v[p].norm(), ps.v_f[p].norm()));
+    c_max = parallel::max(c_max);  // over all ranks (mpirun)
+    v_max = parallel::max(v_max);
     std::ostringstream os;
     os << "undrained P-wave CFL (c = " << c_max << " m/s incl. K_f/n, |v|max = " << v_max
        << " m/s); Darcy drag is implicit per node and sets no limit";
@@ -232,12 +242,25 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     else if (fast_drainage_) st.solid.v_f = st.solid.v, fast_drainage_ = false;
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
+  std::string on_several_ranks(const scene::Scene& s) const override {
+    if (s.solver.stabilisation.fbar != "none") return "solver.stabilisation.fbar does not run on several ranks yet";
+    return {};
+  }
+  std::vector<typename Formulation<Dim>::Counter> counters() const override {
+    std::vector<typename Formulation<Dim>::Counter> c;
+    domain_.add_counters(c);
+    return c;
+  }
+  void distribute(State<Dim>& st) override {
+    parallel::distribute<Shape>(domain_, grid_, st, schedule_);
+    regroup_by_material(st.solid, material_particles_);
+  }
   // Restart: the last step's schedule order, which the next step's reordering (0) reads; every
   // other field is rebuilt by each step from the particles.
   // The largest load so far and the steps beyond the suction bound (9) so far are carried too.
   void save(Checkpoint& c) const override {
     save_order(c, "formulation/schedule_order", schedule_);
-    c.put("formulation/load_scale", std::vector<double>{load_scale_, static_cast<double>(suction_steps_)});
+    c.put_global("formulation/load_scale", std::vector<double>{load_scale_, static_cast<double>(suction_steps_)});
   }
   void restore(const Checkpoint& c, State<Dim>& st) override {
     regroup_by_material(st.solid, material_particles_);  // the checkpoint's particle order
@@ -313,7 +336,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
           drag_[i] += wx * d_r;
         }
       });
-    });
+    }, solid_.acc, fluid_.acc, drag_);
   }
 
   /// (3) Per node and component, with u = velocities at the end of the step:
@@ -508,8 +531,8 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
 #pragma omp parallel for schedule(static) reduction(min : bad) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p)
       if (ps.fluid_material[p] >= 0 && ps.p[p] < -limit) bad = std::min(bad, p);
-    suction_steps_ = bad == transfer::no_particle ? 0 : suction_steps_ + 1;
-    if (suction_steps_ < persistent_steps) return;
+    suction_steps_ = parallel::any(bad != transfer::no_particle) ? suction_steps_ + 1 : 0;  // anywhere in the body
+    if (suction_steps_ < persistent_steps || bad == transfer::no_particle) return;
     std::ostringstream what, remedy;
     what << "has pore pressure " << ps.p[bad] << " Pa, below -" << limit
          << " Pa (twice the larger of water's cavitation suction, about 100 kPa, and the largest stress the scene "
@@ -576,6 +599,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   StripeSchedule schedule_;
   Reorder<Dim> reorder_;
   FBar<Dim, S> fbar_;
+  parallel::Domain<Dim> domain_;  // mpirun: this rank's stripes and particles
   static constexpr long reorder_interval = 10;  // steps
   static constexpr double cavitation_suction = 1.0e5;  // Pa, gauge: water's absolute pressure near zero
   double stress_scale0_ = 0.0;  // Pa, S0 of the suction bound (9)

@@ -55,6 +55,19 @@ class Checkpoint {
     put(name, order);
     header["particle_orders"][name] = set;
   }
+  /// A small array with the same values on every rank (a run's scalars): stored as put() does and
+  /// marked in the header ("global_arrays"), so that a run on several ranks writes rank 0's.
+  template <class T>
+  void put_global(const std::string& name, const std::vector<T>& v) {
+    put(name, v);
+    header["global_arrays"][name] = true;
+  }
+  /// Copies array `name` of `other` (its element size and values) into this checkpoint.
+  void copy_array(const Checkpoint& other, const std::string& name) {
+    for (const auto& s : other.sections_)
+      if (s.name == name) return put_bytes(name, s.element_bytes, s.count, other.data_.data() + s.offset);
+    throw std::logic_error("Checkpoint::copy_array: no array " + name);
+  }
   /// The names of the arrays, in the order they were put.
   std::vector<std::string> names() const {
     std::vector<std::string> n;

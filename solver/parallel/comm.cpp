@@ -132,6 +132,20 @@ std::vector<std::vector<char>> gather_to_root(const std::vector<char>& bytes) {
   return out;
 }
 
+std::vector<std::vector<char>> all_gather(const std::vector<char>& bytes) {
+  if (!g_started) return {bytes};
+  Timed t;
+  int n = static_cast<int>(bytes.size());
+  std::vector<int> counts(static_cast<std::size_t>(g_ranks)), displs(counts.size() + 1, 0);
+  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, world());
+  for (std::size_t r = 0; r < counts.size(); ++r) displs[r + 1] = displs[r] + counts[r];
+  std::vector<char> all(static_cast<std::size_t>(displs.back()));
+  MPI_Allgatherv(bytes.data(), n, MPI_CHAR, all.data(), counts.data(), displs.data(), MPI_CHAR, world());
+  std::vector<std::vector<char>> out;
+  for (std::size_t r = 0; r < counts.size(); ++r) out.emplace_back(all.begin() + displs[r], all.begin() + displs[r + 1]);
+  return out;
+}
+
 void barrier() {
   if (!g_started) return;
   Timed t;

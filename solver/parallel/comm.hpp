@@ -50,6 +50,8 @@ std::vector<long> all_gather(long v);
 std::string broadcast(const std::string& s);
 /// Bytes from every rank to rank 0, in rank order (rank 0 gets them all; the others an empty list).
 std::vector<std::vector<char>> gather_to_root(const std::vector<char>& bytes);
+/// Bytes from every rank to every rank, in rank order.
+std::vector<std::vector<char>> all_gather(const std::vector<char>& bytes);
 void barrier();
 
 /// Seconds of wall time this rank spent in communication (collectives, ghost exchange, migration).

@@ -3,6 +3,7 @@
 #include <petscdmda.h>
 #include <petscsf.h>
 
+#include <array>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -24,7 +25,8 @@ void petsc(PetscErrorCode code) {
 struct StripeExchange::Impl {
   // Cuts at odd stripes (the lower rank's stripe is colour 0): the lower rank (leaf) finishes its
   // colour first. Cuts at even stripes: the upper rank (root) does.
-  PetscSF leaf_first = nullptr, root_first = nullptr;
+  // Per Reach (support, moved_cell): its shared columns.
+  std::array<PetscSF, 2> leaf_first{nullptr, nullptr}, root_first{nullptr, nullptr};
   // The grid's nodes over the ranks as PETSc holds them (DMDA): rank r owns the node columns of its
   // stripes along the stripe axis and every node across it. The distributed solves build their
   // vectors and matrices on it.
@@ -41,8 +43,7 @@ struct StripeExchange::Impl {
   }
   ~Impl() {
     DMDestroy(&da);
-    PetscSFDestroy(&leaf_first);
-    PetscSFDestroy(&root_first);
+    for (auto* sf : {&leaf_first[0], &leaf_first[1], &root_first[0], &root_first[1]}) PetscSFDestroy(sf);
     for (auto& [b, t] : types) MPI_Type_free(&t);
   }
 };
@@ -52,33 +53,37 @@ StripeExchange::StripeExchange(const std::array<int, 3>& nodes, int axis, int wi
     : impl_(std::make_unique<Impl>()) {
   const int me = rank(), R = ranks();
   const PetscInt n_all = static_cast<PetscInt>(static_cast<std::size_t>(nodes[0]) * nodes[1] * nodes[2]);
-  std::vector<PetscInt> leaves;
-  std::vector<PetscSFNode> roots;
-  bool odd = false;
-  if (me + 1 < R) {
-    // The shared columns at my upper cut: my ghosts (leaves), the next rank's nodes (roots).
-    const int s = cuts[static_cast<std::size_t>(me) + 1];
-    odd = s % 2 == 1;
-    const int first = s * width, last = std::min(nodes[axis] - 1, s * width + support - 2);
-    std::array<int, 3> ijk{0, 0, 0}, lo{0, 0, 0}, hi{nodes[0] - 1, nodes[1] - 1, nodes[2] - 1};
-    lo[axis] = first, hi[axis] = last;
-    for (ijk[2] = lo[2]; ijk[2] <= hi[2]; ++ijk[2])
-      for (ijk[1] = lo[1]; ijk[1] <= hi[1]; ++ijk[1])
-        for (ijk[0] = lo[0]; ijk[0] <= hi[0]; ++ijk[0]) {
-          const PetscInt i = ijk[0] + nodes[0] * (ijk[1] + static_cast<PetscInt>(nodes[1]) * ijk[2]);
-          leaves.push_back(i);
-          roots.push_back({me + 1, i});
-        }
+  for (const Reach reach : {Reach::support, Reach::moved_cell}) {
+    std::vector<PetscInt> leaves;
+    std::vector<PetscSFNode> roots;
+    bool odd = false;
+    if (me + 1 < R) {
+      // The shared columns at my upper cut: my ghosts (leaves), the next rank's nodes (roots).
+      const int s = cuts[static_cast<std::size_t>(me) + 1];
+      odd = s % 2 == 1;
+      const int first = s * width - (reach == Reach::moved_cell ? 1 : 0);
+      const int last = std::min(nodes[axis] - 1, s * width + support - 2);
+      std::array<int, 3> ijk{0, 0, 0}, lo{0, 0, 0}, hi{nodes[0] - 1, nodes[1] - 1, nodes[2] - 1};
+      lo[axis] = first, hi[axis] = last;
+      for (ijk[2] = lo[2]; ijk[2] <= hi[2]; ++ijk[2])
+        for (ijk[1] = lo[1]; ijk[1] <= hi[1]; ++ijk[1])
+          for (ijk[0] = lo[0]; ijk[0] <= hi[0]; ++ijk[0]) {
+            const PetscInt i = ijk[0] + nodes[0] * (ijk[1] + static_cast<PetscInt>(nodes[1]) * ijk[2]);
+            leaves.push_back(i);
+            roots.push_back({me + 1, i});
+          }
+    }
+    auto make = [&](PetscSF& sf, bool mine) {
+      petsc(PetscSFCreate(PETSC_COMM_WORLD, &sf));
+      const PetscInt n = mine ? static_cast<PetscInt>(leaves.size()) : 0;
+      petsc(PetscSFSetGraph(sf, n_all, n, mine ? leaves.data() : nullptr, PETSC_COPY_VALUES,
+                            mine ? roots.data() : nullptr, PETSC_COPY_VALUES));
+      petsc(PetscSFSetUp(sf));
+    };
+    const auto k = static_cast<std::size_t>(reach);
+    make(impl_->leaf_first[k], odd);
+    make(impl_->root_first[k], !odd && me + 1 < R);
   }
-  auto make = [&](PetscSF& sf, bool mine) {
-    petsc(PetscSFCreate(PETSC_COMM_WORLD, &sf));
-    const PetscInt n = mine ? static_cast<PetscInt>(leaves.size()) : 0;
-    petsc(PetscSFSetGraph(sf, n_all, n, mine ? leaves.data() : nullptr, PETSC_COPY_VALUES,
-                          mine ? roots.data() : nullptr, PETSC_COPY_VALUES));
-    petsc(PetscSFSetUp(sf));
-  };
-  make(impl_->leaf_first, odd);
-  make(impl_->root_first, !odd && me + 1 < R);
 
   // The DMDA of the same partition: ownership ranges along the axis from the cuts, one rank
   // across the other axes, ghost width S - 1 (the shared columns).
@@ -111,21 +116,23 @@ StripeExchange::StripeExchange(const std::array<int, 3>& nodes, int axis, int wi
 
 StripeExchange::~StripeExchange() = default;
 
-void StripeExchange::after_colour(int colour, void* nodes, std::size_t bytes) const {
+void StripeExchange::after_colour(int colour, void* nodes, std::size_t bytes, Reach reach) const {
   const double t0 = MPI_Wtime();
   const MPI_Datatype t = impl_->type(bytes);
+  PetscSF leaf_first = impl_->leaf_first[static_cast<std::size_t>(reach)];
+  PetscSF root_first = impl_->root_first[static_cast<std::size_t>(reach)];
   if (colour == 0) {
     // Partial sums to the rank that adds the second colour: leaf -> root, root -> leaf.
-    PetscSFReduceBegin(impl_->leaf_first, t, nodes, nodes, MPI_REPLACE);
-    PetscSFBcastBegin(impl_->root_first, t, nodes, nodes, MPI_REPLACE);
-    PetscSFReduceEnd(impl_->leaf_first, t, nodes, nodes, MPI_REPLACE);
-    PetscSFBcastEnd(impl_->root_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFReduceBegin(leaf_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFBcastBegin(root_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFReduceEnd(leaf_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFBcastEnd(root_first, t, nodes, nodes, MPI_REPLACE);
   } else {
     // Finished sums back to the rank that ran the first colour.
-    PetscSFBcastBegin(impl_->leaf_first, t, nodes, nodes, MPI_REPLACE);
-    PetscSFReduceBegin(impl_->root_first, t, nodes, nodes, MPI_REPLACE);
-    PetscSFBcastEnd(impl_->leaf_first, t, nodes, nodes, MPI_REPLACE);
-    PetscSFReduceEnd(impl_->root_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFBcastBegin(leaf_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFReduceBegin(root_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFBcastEnd(leaf_first, t, nodes, nodes, MPI_REPLACE);
+    PetscSFReduceEnd(root_first, t, nodes, nodes, MPI_REPLACE);
   }
   add_communication_seconds(MPI_Wtime() - t0, Traffic::exchange);
 }

@@ -34,6 +34,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -52,7 +53,7 @@ class StripeExchange final : public NodeExchange {
   ~StripeExchange() override;
   StripeExchange(const StripeExchange&) = delete;
   StripeExchange& operator=(const StripeExchange&) = delete;
-  void after_colour(int colour, void* nodes, std::size_t bytes) const override;
+  void after_colour(int colour, void* nodes, std::size_t bytes, Reach reach) const override;
   /// The node columns [first, second) this rank owns along the axis, as PETSc's DMDA holds them.
   std::pair<int, int> owned_columns() const { return owned_; }
 
@@ -209,9 +210,14 @@ class Domain {
     for (int a = 0; a < Dim; ++a) lohi[a] = box.lo[a], lohi[Dim + a] = -static_cast<long>(box.hi[a]);
     min(std::span<long>(lohi));
     for (int a = 0; a < Dim; ++a) box.lo[a] = static_cast<int>(lohi[a]), box.hi[a] = static_cast<int>(-lohi[Dim + a]);
-    box.lo[axis_] = cuts_[rank()] * width_;
-    box.hi[axis_] = std::min(nodes_[axis_] - 1, cuts_[rank() + 1] * width_ + support_ - 2);
+    std::tie(box.lo[axis_], box.hi[axis_]) = box_columns();
     return box;
+  }
+
+  /// The node columns along the axis that node_box gives this rank: its own and the shared ones
+  /// above, [first, last].
+  std::pair<int, int> box_columns() const {
+    return {cuts_[rank()] * width_, std::min(nodes_[axis_] - 1, cuts_[rank() + 1] * width_ + support_ - 2)};
   }
 
   /// Re-cuts for an equal particle count per rank when the counts differ by more than

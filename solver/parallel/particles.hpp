@@ -2,10 +2,14 @@
 // so that a step reads the same at one rank, where they cost nothing.
 #pragma once
 
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "solver/formulation.hpp"
 #include "solver/grid/grid.hpp"
+#include "solver/loads.hpp"
 #include "solver/parallel/domain.hpp"
 #include "solver/shape/shape.hpp"
 #include "solver/transfer/schedule.hpp"
@@ -62,6 +66,69 @@ bool own_particles(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSch
   }
   box = d.node_box(box);
   return changed;
+}
+
+/// Loads on particles under mpirun, step (1): the face forces of every rank (collect_face_forces
+/// gives a rank those of its own particles), on every rank in the one-rank order (ordinal), with
+/// their shape data; the node box grows on the other axes to hold all their nodes, as the one-rank
+/// box does, and keeps the rank's columns along the cut axis. Collective; nothing at one rank.
+template <class Shape, int Dim, int S>
+void share_face_forces(const Domain<Dim>& d, const Grid<Dim>& g, std::vector<FaceForce<Dim, S>>& ffs,
+                       NodeBox<Dim>& box) {
+  if (!d.active() || !any(!ffs.empty())) return;
+  struct Record {
+    std::int64_t ordinal;
+    double f[3], x[3], n;
+    std::int64_t split;
+  };
+  std::vector<char> mine(ffs.size() * sizeof(Record));
+  std::vector<std::pair<std::int64_t, int>> own;  // ordinal -> this rank's particle
+  for (std::size_t k = 0; k < ffs.size(); ++k) {
+    Record r{ffs[k].ordinal, {0, 0, 0}, {0, 0, 0}, ffs[k].n, ffs[k].split ? 1 : 0};
+    for (int a = 0; a < Dim; ++a) r.f[a] = ffs[k].f[a], r.x[a] = ffs[k].x[a];
+    std::memcpy(mine.data() + k * sizeof r, &r, sizeof r);
+    own.emplace_back(ffs[k].ordinal, ffs[k].p);
+  }
+  std::vector<Record> all;
+  for (const auto& part : all_gather(mine))
+    for (std::size_t k = 0; k < part.size() / sizeof(Record); ++k) {
+      Record r;
+      std::memcpy(&r, part.data() + k * sizeof r, sizeof r);
+      all.push_back(r);
+    }
+  std::sort(all.begin(), all.end(), [](const Record& a, const Record& b) { return a.ordinal < b.ordinal; });
+  ffs.clear();
+  for (const Record& r : all) {
+    FaceForce<Dim, S> ff{{}, Vec<Dim>::Zero(), -1, r.split != 0};
+    for (int a = 0; a < Dim; ++a) ff.f[a] = r.f[a], ff.x[a] = r.x[a];
+    ff.n = r.n;
+    ff.ordinal = r.ordinal;
+    const auto it = std::lower_bound(own.begin(), own.end(), std::make_pair(r.ordinal, -1));
+    if (it != own.end() && it->first == r.ordinal) ff.p = it->second;
+    shape::evaluate<Shape>(g, ff.x, Vec<Dim>::Zero().eval(), ff.sd);
+    for (int a = 0; a < Dim; ++a) {
+      box.lo[a] = std::min(box.lo[a], ff.sd.base[a]);
+      box.hi[a] = std::max(box.hi[a], ff.sd.base[a] + S - 1);
+    }
+    ffs.push_back(ff);
+  }
+  std::tie(box.lo[d.axis()], box.hi[d.axis()]) = d.box_columns();
+}
+
+/// Step (3) under mpirun: the weights of the face forces' nodes (weigh_face_forces). The rank that
+/// owns a face point's first node column holds all of its nodes (its box reaches S - 1 columns
+/// past its own) with their finished masses: it weighs the face force, and a sum over the ranks
+/// gives every rank its scale. At one rank, weigh_face_forces.
+template <int Dim, int S, class HasMass>
+void weigh_face_forces(const Domain<Dim>& d, const Grid<Dim>& g, std::vector<FaceForce<Dim, S>>& ffs,
+                       HasMass&& has_mass) {
+  if (!d.active()) return swmpm::weigh_face_forces(g, ffs, has_mass);
+  if (ffs.empty()) return;  // every rank holds the same list (share_face_forces)
+  std::vector<double> scale(ffs.size(), 0.0);
+  for (std::size_t k = 0; k < ffs.size(); ++k)
+    if (d.owner(d.stripe_of_node(ffs[k].sd.base[d.axis()])) == rank()) scale[k] = face_force_scale(g, ffs[k], has_mass);
+  sum(std::span<double>(scale));
+  for (std::size_t k = 0; k < ffs.size(); ++k) ffs[k].scale = scale[k];
 }
 
 }  // namespace swmpm::parallel

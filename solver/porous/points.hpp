@@ -31,7 +31,7 @@ void gather_soil_points(const Grid<Dim>& g, const NodeBox<Dim>& box, const Strip
     soil.acc[i].mv.setZero();
     if constexpr (kRemapWater) water.acc[i].mv.setZero();
   });
-  schedule.run([&](int p) __attribute__((always_inline)) {
+  auto remap = [&](int p) __attribute__((always_inline)) {
     Vec<Dim> vs = Vec<Dim>::Zero(), vs_old = Vec<Dim>::Zero(), vw = Vec<Dim>::Zero(), vw_old = Vec<Dim>::Zero();
     shape::for_each_node(g, sd[p], [&](std::size_t i, double N, const auto&) {
       vs += N * soil.v[i];
@@ -54,7 +54,10 @@ void gather_soil_points(const Grid<Dim>& g, const NodeBox<Dim>& box, const Strip
     } else {
       shape::for_each_node(g, sd[p], [&](std::size_t i, double N, const auto&) { soil.acc[i].mv += N * mv; });
     }
-  });
+  };
+  // Under mpirun the remapped momenta are exchanged at the cuts (StripeSchedule::run).
+  if constexpr (kRemapWater) schedule.run(remap, soil.acc, water.acc);
+  else schedule.run(remap, soil.acc);
   auto remapped = [](const typename NodeFields<Dim>::Accum& a) {
     return a.m > transfer::empty_node_mass ? Vec<Dim>(a.mv / a.m) : Vec<Dim>::Zero();
   };

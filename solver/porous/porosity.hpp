@@ -36,7 +36,7 @@ void nodal_porosity(const Grid<Dim>& g, const NodeBox<Dim>& box, const StripeSch
       sums[i][0] += N * wn;
       sums[i][1] += N * w;
     });
-  });
+  }, sums);
   g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
     auto& s = sums[i];
     s[0] = porosity_at_node(s[0], s[1], empty);

@@ -27,6 +27,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -57,7 +58,7 @@ class NodeProjection {
            const std::vector<shape::ShapeData<Dim, S, G>>& sd, const std::vector<Vec<Dim>>& x, Weight&& weight,
            Value&& value) {
     if (well_posed_.size() != g.num_nodes()) {  // first fit (or another grid): zero, memory only where used
-      blocks_ = NodeArray<double>(g.num_nodes() * NB);
+      blocks_ = NodeArray<Block>(g.num_nodes());
       well_posed_ = NodeArray<std::uint8_t>(g.num_nodes());
     }
     g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
@@ -98,7 +99,7 @@ class NodeProjection {
           h[10] += wf, h[11] += wf * d0, h[12] += wf * d1, h[13] += wf * d2;
         }
       });
-    });
+    }, blocks_);
     g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
       double* blk = block(i);
       if (!(blk[0] > 0.0)) {  // no weight (or not finite): a_I = 0, which at_point relies on
@@ -147,16 +148,16 @@ class NodeProjection {
   }
 
   /// Whether node i received any weight in the last fit.
-  bool has(std::size_t i) const { return blocks_[i * NB] > 0.0; }
+  bool has(std::size_t i) const { return blocks_[i][0] > 0.0; }
   /// The fitted value at node i (a_I[0]: the basis is centred at the node).
-  double at_node(std::size_t i) const { return has(i) ? blocks_[i * NB + NH] : 0.0; }
+  double at_node(std::size_t i) const { return has(i) ? blocks_[i][NH] : 0.0; }
   /// The fitted gradient at node i [unit of f per m]: a_I[1..Dim] / h (Order 1; zero for Order 0, for a
   /// node that fell back to Order 0, and for a node without weight).
   Vec<Dim> gradient_at_node(const Grid<Dim>& g, std::size_t i) const {
     Vec<Dim> grad = Vec<Dim>::Zero();
     if constexpr (Order == 1)
       if (has(i))
-        for (int a = 0; a < Dim; ++a) grad[a] = blocks_[i * NB + NH + 1 + a] / g.h();
+        for (int a = 0; a < Dim; ++a) grad[a] = blocks_[i][NH + 1 + a] / g.h();
     return grad;
   }
   /// Whether node i's points determine its linear fit (Order 1: leverage <= kMaxLeverage; Order 0:
@@ -197,7 +198,7 @@ class NodeProjection {
   [[gnu::always_inline]] void for_each_node_value(const Grid<Dim>& g, const shape::ShapeData<Dim, S, G>& sd,
                                                   const Vec<Dim>& x, Fn&& fn) const {
     for_each_node_offset(g, sd, x, [&](std::size_t i, double N, double d0, double d1, double d2) {
-      const double* a = blocks_.data() + i * NB + NH;  // Q . a_I, Q = (1, d)
+      const double* a = blocks_[i].data() + NH;  // Q . a_I, Q = (1, d)
       double qa = a[0];
       if constexpr (Order == 1) {
         qa += d0 * a[1];
@@ -211,7 +212,7 @@ class NodeProjection {
   }
 
  private:
-  double* block(std::size_t i) { return blocks_.data() + i * NB; }
+  double* block(std::size_t i) { return blocks_[i].data(); }
 
   /// fn(node, N_Ip, d_x, d_y, d_z) (d_z = 0 in 2D) over a point's nodes in for_each_node's order
   /// (and with its N_Ip: wx[a] times the row's weight). Row by row (shape::for_each_row): the row's offsets along
@@ -238,7 +239,8 @@ class NodeProjection {
 
   static constexpr double kMaxLeverage = 100.0;  // largest leverage W (H^-1)_00 of an own linear fit
 
-  NodeArray<double> blocks_;  // per node: packed upper triangle of H_I, then rhs -> a_I
+  using Block = std::array<double, NB>;  // packed upper triangle of H_I, then rhs -> a_I
+  NodeArray<Block> blocks_;  // per node
   NodeArray<std::uint8_t> well_posed_;  // per node: 1 when the last fit was well posed (Order 1)
 };
 

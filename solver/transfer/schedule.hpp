@@ -24,10 +24,18 @@ namespace swmpm {
 /// other one (which has none yet), and after colour 1 the finished sums go back: every node then
 /// holds the one-rank sum, bit for bit, on both ranks. `nodes` is a node array (any element of
 /// `bytes` bytes, a whole number of doubles) indexed by the grid's flat node index.
+///
+/// What a particle of stripe s reaches along the axis: the nodes of its shape functions at the
+/// start of the step (`support`, columns [base, base + S - 1]), or the grid cell that holds it
+/// after the step moved it by less than a cell (`moved_cell`, cells indexed by their lowest node,
+/// columns [base - 1, base + S - 1]). At a cut s W the shared columns are [s W, s W + S - 2] for
+/// the support and [s W - 1, s W + S - 2] for moved cells; either way only stripes s - 1 and s
+/// reach them.
+enum class Reach { support, moved_cell };
 class NodeExchange {
  public:
   virtual ~NodeExchange() = default;
-  virtual void after_colour(int colour, void* nodes, std::size_t bytes) const = 0;
+  virtual void after_colour(int colour, void* nodes, std::size_t bytes, Reach reach) const = 0;
 };
 
 class StripeSchedule {
@@ -96,20 +104,32 @@ class StripeSchedule {
   /// (NodeExchange; nothing at one rank).
   template <class Fn, class... NodeArrays>
   void run(Fn&& fn, NodeArrays&... scattered) const {
-    if constexpr (sizeof...(NodeArrays) == 0)
-      if (exchange_) throw std::logic_error("a scatter that does not name its node arrays ran on several ranks");
-    for (int colour = 0; colour < 2; ++colour) {
-#pragma omp parallel for schedule(dynamic, 1) if (static_cast<long>(order_.size()) > parallel_threshold)
-      for (int s = colour; s < stripes_; s += 2)
-        for (int k = start_[s]; k < start_[s + 1]; ++k) fn(order_[k]);
-      if (exchange_) (exchange_->after_colour(colour, scattered.data(), sizeof(scattered[0])), ...);
-    }
+    run_reaching(Reach::support, fn, scattered...);
+  }
+  /// run() for a scatter into the cells that hold the particles after the step's move (arrays
+  /// indexed as cells by their lowest node): a particle moves less than a cell per step, so a
+  /// cell still gets the points of at most two neighbouring stripes, of two colours.
+  template <class Fn, class... CellArrays>
+  void run_after_move(Fn&& fn, CellArrays&... scattered) const {
+    run_reaching(Reach::moved_cell, fn, scattered...);
   }
   /// The ranks' exchange of scattered node columns (nullptr: one rank).
   void set_exchange(const NodeExchange* exchange) { exchange_ = exchange; }
   const NodeExchange* exchange() const { return exchange_; }
 
  private:
+  template <class Fn, class... NodeArrays>
+  void run_reaching([[maybe_unused]] Reach reach, Fn& fn, NodeArrays&... scattered) const {
+    if constexpr (sizeof...(NodeArrays) == 0)
+      if (exchange_) throw std::logic_error("a scatter that does not name its node arrays ran on several ranks");
+    for (int colour = 0; colour < 2; ++colour) {
+#pragma omp parallel for schedule(dynamic, 1) if (static_cast<long>(order_.size()) > parallel_threshold)
+      for (int s = colour; s < stripes_; s += 2)
+        for (int k = start_[s]; k < start_[s + 1]; ++k) fn(order_[k]);
+      if (exchange_) (exchange_->after_colour(colour, scattered.data(), sizeof(scattered[0]), reach), ...);
+    }
+  }
+
   const NodeExchange* exchange_ = nullptr;
   bool built_ = false;
   int width_ = 1, stripes_ = 0;

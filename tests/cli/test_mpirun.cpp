@@ -180,6 +180,80 @@ TEST(Mpirun, DryCollapseOnFourOversubscribedRanksIsBitwiseTheOneRankRun) {
   EXPECT_EQ(load_json(p.many + "/run.json")["particles_per_rank"]["each"].size(), 4u);
 }
 
+/// The column of column_collapse saturated with water (explicit-single-point): its pore pressure
+/// builds up as the column collapses and slides across the cut.
+nlohmann::json saturated_collapse(int dim, const std::string& shape) {
+  nlohmann::json s = column_collapse(dim, shape);
+  s["name"] = "saturated-collapse";
+  s["formulation"] = "explicit-single-point";
+  s["materials"] = {{{"name", "sand"}, {"model", "mohr-coulomb"}, {"grain_density", 2650.0}, {"porosity", 0.4},
+                     {"youngs_modulus", 2e6}, {"poisson_ratio", 0.3}, {"cohesion", 0.0}, {"friction_angle", 30.0},
+                     {"dilation_angle", 0.0}, {"hydraulic_conductivity", 1e-2}},
+                    {{"name", "water"}, {"model", "fluid"}, {"density", 1000.0}, {"bulk_modulus", 2e7}}};
+  s["bodies"][0]["fluid"] = "water";
+  for (auto& b : s["boundaries"]) b["fluid"] = "impermeable";
+  s["output"]["monitors"][1]["quantities"] = {"displacement_y", "pore_pressure"};
+  s["bodies"][0]["initial"]["velocity"][0] = 0.75;
+  s["grid"]["min"][0] = -0.1;  // the column's left side is free: it spreads both ways
+  s["boundaries"].erase(0);    // (x_min)
+  return s;
+}
+
+TEST(Mpirun, ExplicitSinglePointOnTwoRanksIsBitwiseTheOneRankRun2D) {
+  // GIMP: a cell's points may have their first node in two stripes, on two ranks (the strain
+  // smoothing's cell sums cross the cut); the default mfvp-linear pressure step.
+  nlohmann::json s = saturated_collapse(2, "gimp");
+  s["time"]["end"] = 0.2;  // later the floor's bottom row of points sinks through the roller (t = 0.245 s)
+  const Pair p = solve_both(s, "mpirun-esp-2d", 2);
+  expect_same_answers(p);
+  const auto rj = load_json(p.many + "/run.json");
+  EXPECT_GT(rj["counters"]["particles migrated"].get<double>(), 400.0);
+  EXPECT_GE(rj["counters"]["rebalances"].get<double>(), 1.0);
+}
+
+TEST(Mpirun, ExplicitSinglePointCellPressureConservativeOnTwoRanksIsBitwiseTheOneRankRun3D) {
+  nlohmann::json s = saturated_collapse(3, "gimp");
+  s["solver"]["continuity"] = "conservative";
+  s["solver"]["stabilisation"] = {{"pressure", "cell-constant"}};
+  const Pair p = solve_both(s, "mpirun-esp-3d", 2);
+  expect_same_answers(p);
+  EXPECT_GT(load_json(p.many + "/run.json")["counters"]["particles migrated"].get<double>(), 600.0);
+  EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
+}
+
+TEST(Mpirun, ExplicitSinglePointQuadraticPressureFitOnThreeRanks) {
+  nlohmann::json s = saturated_collapse(2, "bspline2");
+  s["solver"]["stabilisation"] = {{"pressure", "mfvp-quadratic"}};
+  s["loads"] = {{{"type", "pressure"}, {"body", "column"}, {"face", "y_max"}, {"value", 2000.0}}};
+  s["time"]["end"] = 0.12;  // the suction bound stops it at t = 0.16 s
+  const Pair p = solve_both(s, "mpirun-esp-3ranks", 3);
+  expect_same_answers(p);
+  EXPECT_GT(load_json(p.many + "/run.json")["counters"]["particles migrated"].get<double>(), 200.0);
+}
+
+TEST(Mpirun, TractionsOnFacePointsOfBothRanksAreTheOneRankLoads) {
+  // A traction on the column's top face, which the cut between the two ranks crosses: each face
+  // point's force reaches nodes of both ranks, weighed by the rank that holds all its nodes.
+  nlohmann::json s = column_collapse(2, "bspline2");
+  s["loads"] = {{{"type", "traction"}, {"body", "column"}, {"face", "y_max"}, {"value", {0.0, -5000.0}}}};
+  s["time"]["end"] = 0.15;
+  const Pair p = solve_both(s, "mpirun-dry-loads", 2);
+  expect_same_answers(p);
+  // The load did work (the top sinks more than under its weight alone).
+  const Pair q = solve_both(column_collapse(2, "bspline2"), "mpirun-dry-unloaded", 2);
+  EXPECT_NE(read_text(p.one + "/monitors.csv"), read_text(q.one + "/monitors.csv"));
+}
+
+TEST(Mpirun, TerzaghiOnTwoRanksIsBitwiseTheOneRankRun) {
+  // The column stands along y, the cut across it: the load acts on the upper rank's points.
+  nlohmann::json s = load_json(SWMPM_SOURCE_DIR "/examples/terzaghi/scene.json");
+  s["time"]["end"] = 0.05;
+  s["output"]["interval"] = 0.01;
+  const Pair p = solve_both(s, "mpirun-terzaghi", 2);
+  expect_same_answers(p);
+  EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
+}
+
 /// The final frame of `run` (the last entry of results.pvd).
 scene::PointCloud last_frame(const std::string& run) {
   const auto frames = scene::read_pvd(run + "/output/results.pvd");
