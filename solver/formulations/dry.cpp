@@ -146,7 +146,8 @@ class Dry final : public Formulation<Dim> {
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
   std::string on_several_ranks(const scene::Scene& s) const override {
-    if (s.solver.stabilisation.fbar != "none") return "solver.stabilisation.fbar does not run on several ranks yet";
+    if (s.solver.stabilisation.fbar == "modified")
+      return "solver.stabilisation.fbar \"modified\" does not run on several ranks yet (\"standard\" does)";
     return {};
   }
   std::vector<typename Formulation<Dim>::Counter> counters() const override {

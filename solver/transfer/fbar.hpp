@@ -22,6 +22,10 @@
 // fixed for the whole run (the last patch of an axis may be cut by the grid's end); a particle
 // belongs to the patch holding its current position (x_{n+1}: the stage runs after G2P).
 //
+// Under mpirun the nodal sums go through the schedule's exchange like any scatter (standard runs on
+// several ranks); the patch sums of `modified` do not yet (a patch may span more than the two
+// stripes of a cut, and one rank sums it in storage order).
+//
 // Determinism: the nodal sums go through the formulation's StripeSchedule, the
 // patch sums through a second StripeSchedule of width 1 keyed by the row of patches (one row = one
 // "stripe": each patch is summed by one thread in increasing particle index); everything else writes per
@@ -134,7 +138,7 @@ class FBar {
           node_[row + a][1] += sd[p].w[0][a] * mdJ_r;
         }
       });
-    });
+    }, node_);
     g.parallel_for_each_node(box, [&](std::size_t i, const auto&) {
       if (node_[i][0] > 0.0) node_[i][1] /= node_[i][0];  // the nodal average of ΔJ
     });

@@ -244,6 +244,16 @@ TEST(Mpirun, TractionsOnFacePointsOfBothRanksAreTheOneRankLoads) {
   EXPECT_NE(read_text(p.one + "/monitors.csv"), read_text(q.one + "/monitors.csv"));
 }
 
+TEST(Mpirun, StandardFbarOnTwoRanksIsBitwiseTheOneRankRun) {
+  nlohmann::json dry = column_collapse(2, "bspline2");
+  dry["solver"]["stabilisation"] = {{"fbar", "standard"}};
+  expect_same_answers(solve_both(dry, "mpirun-fbar-dry", 2));
+  nlohmann::json esp = saturated_collapse(3, "gimp");
+  esp["solver"]["stabilisation"] = {{"fbar", "standard"}};
+  esp["time"]["end"] = 0.15;
+  expect_same_answers(solve_both(esp, "mpirun-fbar-esp", 2));
+}
+
 TEST(Mpirun, TerzaghiOnTwoRanksIsBitwiseTheOneRankRun) {
   // The column stands along y, the cut across it: the load acts on the upper rank's points.
   nlohmann::json s = load_json(SWMPM_SOURCE_DIR "/examples/terzaghi/scene.json");
@@ -305,14 +315,15 @@ TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
 
 TEST(Mpirun, AFormulationNotYetOnSeveralRanksIsRefusedBeforeAnythingIsWritten) {
   nlohmann::json s = column_collapse(2, "bspline2");
-  s["solver"]["stabilisation"] = {{"fbar", "standard"}};
+  s["solver"]["stabilisation"] = {{"fbar", "modified"}};
   const fs::path dir = scratch("mpirun-refused");
   std::ofstream(dir / "scene.json") << s.dump(2);
   const std::string run = (dir / "run").string();
   ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run + " -q", dir).status, 0);
   const Result r = mpirun(2, "solve " + run + " -q --threads 1", dir);
   EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_NE(r.err.find(run + "/scene.json: solver.stabilisation.fbar does not run on several ranks yet"), std::string::npos)
+  EXPECT_NE(r.err.find(run + "/scene.json: solver.stabilisation.fbar \"modified\" does not run on several ranks yet"),
+            std::string::npos)
       << r.err;
   // One message (the other rank stays silent), and no output.
   EXPECT_EQ(r.err.find("does not run"), r.err.rfind("does not run")) << r.err;

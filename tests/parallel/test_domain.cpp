@@ -6,12 +6,17 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <random>
+
+#include <Eigen/SparseCholesky>
 
 #include "solver/grid/grid.hpp"
 #include "solver/parallel/comm.hpp"
 #include "solver/parallel/domain.hpp"
 #include "solver/parallel/particles.hpp"
+#include "solver/parallel/poisson.hpp"
 #include "solver/shape/shape.hpp"
 #include "solver/transfer/schedule.hpp"
 #include "solver/transfer/transfer.hpp"
@@ -22,7 +27,7 @@ namespace {
 using Shape = shape::BSpline<2>;
 constexpr int S = Shape::support;
 
-Grid<2> grid() { return Grid<2>(Vec<2>(0.0, 0.0), Vec<2>(3.0, 1.0), 0.05, Shape::degree, Shape::bspline); }
+Grid<2> grid(double h = 0.05) { return Grid<2>(Vec<2>(0.0, 0.0), Vec<2>(3.0, 1.0), h, Shape::degree, Shape::bspline); }
 
 /// n points scattered over [0.2, 2.8] x [0.1, 0.9] with masses of many magnitudes (so that the
 /// order of a sum shows in its last bits).
@@ -143,6 +148,181 @@ TEST(Domain, GatherSetGivesRankZeroTheWholeSetInTheOneRankOrder) {
     EXPECT_EQ(whole.x[p], all.x[p]);
     EXPECT_EQ(whole.m[p], all.m[p]);
   }
+}
+
+/// The pressure Poisson system of a point cloud, as the semi-implicit step builds it: per node
+/// the stencil row of L_ij = sum_p V_p grad N_i . grad N_j (slots of the offsets with a flat step
+/// >= 0), the right-hand side sum_p N_i V_p (1 + x_p), through the schedule (exchanged on several
+/// ranks); roles per node of `box`: no point, inactive; the two lowest rows with points
+/// prescribed (dp = 0.1 + 0.05 x); the others unknown.
+struct PoissonRows {
+  static constexpr int R = S - 1;
+  using St = linear::Stencil<2, R>;
+  static constexpr int K = St::K;
+  NodeArray<std::array<double, K>> stencil;
+  NodeArray<double> rhs, dp;
+  NodeArray<std::uint8_t> role;
+};
+PoissonRows assemble(const Grid<2>& g, const ParticleSet<2>& ps, StripeSchedule& schedule, NodeBox<2>& box,
+                     const Domain<2>* d) {
+  using St = PoissonRows::St;
+  constexpr int K = PoissonRows::K;
+  PoissonRows rows;
+  rows.stencil.resize(g.num_nodes());
+  rows.rhs.resize(g.num_nodes());
+  rows.dp.resize(g.num_nodes());
+  rows.role.resize(g.num_nodes());
+  std::vector<shape::ShapeData<2, S>> sd;
+  long bad = -1;
+  box = transfer::evaluate_shapes<Shape>(g, ps, sd, bad);
+  transfer::build_schedule(g, sd, schedule);
+  if (d) box = d->node_box(box);
+  const auto nodes = g.nodes_per_axis();
+  schedule.run([&](int p) {
+    std::array<std::size_t, S * S> idx{};
+    std::array<double, S * S> N{};
+    std::array<Vec<2>, S * S> dN{};
+    int n = 0;
+    shape::for_each_node(g, sd[p], [&](std::size_t i, double w, const Vec<2>& grad) { idx[n] = i, N[n] = w, dN[n] = grad, ++n; });
+    for (int a = 0; a < n; ++a) {
+      rows.rhs[idx[a]] += N[a] * ps.V[p] * (1.0 + ps.x[p][0]);
+      for (int b = 0; b < n; ++b) {
+        const long step = static_cast<long>(idx[b]) - static_cast<long>(idx[a]);
+        if (step < 0) continue;
+        const std::array<int, 2> off{static_cast<int>(idx[b] % nodes[0]) - static_cast<int>(idx[a] % nodes[0]),
+                                     static_cast<int>(idx[b] / nodes[0]) - static_cast<int>(idx[a] / nodes[0])};
+        rows.stencil[idx[a]][static_cast<std::size_t>(St::slot(off))] += ps.V[p] * dN[a].dot(dN[b]);
+      }
+    }
+  }, rows.stencil, rows.rhs);
+  g.for_each_node(box, [&](std::size_t i, const auto& ijk) {
+    if (!(rows.stencil[i][K / 2] > 0.0)) return;
+    if (g.node_position(ijk)[1] < 0.1 + 1.5 * g.h()) {  // the points start at y = 0.1: the two lowest rows with points
+      rows.role[i] = 2;
+      rows.dp[i] = 0.1 + 0.05 * g.node_position(ijk)[0];
+    } else {
+      rows.role[i] = 1;
+    }
+  });
+  return rows;
+}
+
+/// The system of `n` points on a grid of cell size h, solved on one rank (Eigen's LDLT, on every
+/// rank) and on the ranks (GridPoisson): the ranks' statistics and the largest difference over
+/// the unknown nodes of this rank's columns and the R columns either side, relative to the
+/// largest increment.
+struct PoissonComparison {
+  KspSolve::Stats stats;
+  int unknowns = 0;
+  double worst = 0.0;
+  long compared = 0;
+  double seconds = 0.0;  // the distributed solve's wall time (assembly, hypre's setup, CG)
+};
+PoissonComparison compare_poisson(double h, std::size_t points) {
+  PoissonComparison out;
+  const Grid<2> g = grid(h);
+  const ParticleSet<2> all = cloud(points);
+  constexpr int K = PoissonRows::K;
+  // One rank's answer, on every rank: the unknown nodes' system, factorised.
+  StripeSchedule one;
+  NodeBox<2> all_box;
+  PoissonRows ref = assemble(g, all, one, all_box, nullptr);
+  const auto steps = PoissonRows::St::steps(g.nodes_per_axis());
+  std::vector<int> eq(g.num_nodes(), -1);
+  int n = 0;
+  for (std::size_t i = 0; i < g.num_nodes(); ++i)
+    if (ref.role[i] == 1) eq[i] = n++;
+  std::vector<Eigen::Triplet<double>> t;
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
+  for (std::size_t i = 0; i < g.num_nodes(); ++i) {
+    for (int k = K / 2; k < K; ++k) {
+      const double L = ref.stencil[i][static_cast<std::size_t>(k)];
+      if (L == 0.0) continue;
+      const std::size_t j = static_cast<std::size_t>(static_cast<long>(i) + steps[static_cast<std::size_t>(k)]);
+      if (eq[i] >= 0 && eq[j] >= 0) {
+        t.emplace_back(eq[i], eq[j], L);
+        if (i != j) t.emplace_back(eq[j], eq[i], L);
+      } else if (eq[i] >= 0 && ref.role[j] == 2) {
+        b[eq[i]] -= L * ref.dp[j];
+      } else if (ref.role[i] == 2 && eq[j] >= 0) {
+        b[eq[j]] -= L * ref.dp[i];
+      }
+    }
+    if (eq[i] >= 0) b[eq[i]] += ref.rhs[i];
+  }
+  Eigen::SparseMatrix<double> A(n, n);
+  A.setFromTriplets(t.begin(), t.end());
+  const Eigen::VectorXd x = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(A).solve(b);
+  EXPECT_GT(n, 500);
+
+  // The ranks' answer.
+  ParticleSet<2> mine = all;
+  Domain<2> d;
+  const int axis = transfer::stripe_axis(g);
+  d.distribute(g, S, axis, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
+  StripeSchedule schedule;
+  schedule.set_exchange(d.exchange());
+  NodeBox<2> box;
+  PoissonRows rows = assemble(g, mine, schedule, box, &d);
+  std::vector<int> column_cuts;  // one rank (mpirun -n 1): all columns
+  for (int r = 0; r < ranks() && d.active(); ++r) column_cuts.push_back(d.cuts()[static_cast<std::size_t>(r)] * d.width());
+  if (!d.active()) column_cuts.push_back(0);
+  column_cuts.push_back(g.nodes_per_axis()[axis]);
+  GridPoisson<2, PoissonRows::R> poisson(g.nodes_per_axis(), axis, column_cuts);
+  const double t0 = wall_time();
+  out.stats = poisson.solve(rows.stencil.data()->data(), rows.rhs.data(), rows.role.data(), rows.dp.data(), PoissonRows::R, 1e-10);
+  out.seconds = max(wall_time() - t0);
+  out.unknowns = n;
+  // Every unknown node of this rank's columns, the R above and the R below: within 1e-8 of the
+  // largest increment (the tolerance |b - L x| <= 1e-10 |b| and L's condition).
+  const double scale = x.cwiseAbs().maxCoeff();
+  double worst = 0.0;
+  long compared = 0;
+  NodeBox<2> wide = box;
+  wide.lo[axis] = std::max(0, box.lo[axis] - PoissonRows::R);
+  g.for_each_node(wide, [&](std::size_t i, const auto&) {
+    if (eq[i] < 0) return;
+    const double e = std::abs(rows.dp[i] - x[eq[i]]) / scale;
+    if (e > worst && std::getenv("SWMPM_DEBUG")) std::printf("rank %d node %zu (%zu,%zu) got %g want %g role %d\n", rank(), i, i % g.nodes_per_axis()[0], i / g.nodes_per_axis()[0], rows.dp[i], x[eq[i]], int(rows.role[i]));
+    worst = std::max(worst, e);
+    ++compared;
+  });
+  out.worst = worst;
+  out.compared = compared;
+  // The prescribed nodes of this rank keep their values exactly.
+  g.for_each_node(box, [&](std::size_t i, const auto&) {
+    if (ref.role[i] == 2) {
+      EXPECT_EQ(rows.dp[i], ref.dp[i]);
+    }
+  });
+  return out;
+}
+
+TEST(Poisson, CgWithBoomerAmgOnTheRanksAgreesWithTheOneRankSolveToTheTolerance) {
+  const PoissonComparison c = compare_poisson(0.05, 4000);
+  EXPECT_TRUE(c.stats.converged);
+  EXPECT_LE(c.stats.relative_residual, 1e-10);
+  EXPECT_GT(c.unknowns, 500);
+  EXPECT_GT(c.compared, 100);
+  // |b - L x| <= 1e-10 |b| and L's condition: within 1e-8 of the largest increment.
+  EXPECT_LT(c.worst, 1e-8) << "rank " << rank();
+}
+
+TEST(Poisson, BoomerAmgIterationsGrowSlowlyUnderRefinement) {
+  // The scaling model's Poisson term (bench/mpi_model.py): CG iterations as the unknowns grow 16x
+  // (h halved twice, four points per cell kept).
+  std::vector<int> its;
+  for (const double h : {0.05, 0.025, 0.0125}) {
+    const auto points = static_cast<std::size_t>(4000.0 * (0.05 / h) * (0.05 / h));
+    const PoissonComparison c = compare_poisson(h, points);
+    EXPECT_TRUE(c.stats.converged);
+    EXPECT_LT(c.worst, 1e-8) << "h = " << h;
+    its.push_back(c.stats.iterations);
+    if (rank() == 0)
+      std::printf("h = %g m: %d unknowns, %d CG iterations (BoomerAMG) on %d ranks, %.4f s, max difference %.2e\n", h,
+                  c.unknowns, c.stats.iterations, ranks(), c.seconds, c.worst);
+  }
+  EXPECT_LE(its[2], 2 * its[0]) << "iterations " << its[0] << " -> " << its[2] << " for 16x the unknowns";
 }
 
 }  // namespace

@@ -274,7 +274,7 @@ TEST(ShapeFunctions, PackedQuadraticBSplinesAreThePerAxisOnesBitForBit) {
 }
 
 /// A face force goes to the face point's nodes that carry mass, scaled so that the shares still
-/// sum to the force (solver/loads.hpp, for_each_loaded_node): the case of linear shape functions
+/// sum to the force (solver/loads.hpp, face_force_scale and for_each_loaded_node): the case of linear shape functions
 /// with a particle on a node row, whose next row up has no mass but a weight of 1/2 at the face point.
 TEST(FaceForces, MasslessNodesGetNoShareAndTheResultantIsKept) {
   const Grid<2> g(Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0), 0.1, 1, false);
@@ -286,6 +286,7 @@ TEST(FaceForces, MasslessNodesGetNoShareAndTheResultantIsKept) {
   auto has_mass = [&](std::size_t i) { return i / static_cast<std::size_t>(nn[0]) != top_row; };
   Vec<2> total = Vec<2>::Zero();
   double weight = 0.0;
+  ff.scale = face_force_scale(g, ff, has_mass);  // weigh_face_forces, once the masses are scattered
   for_each_loaded_node(g, ff, has_mass, [&](std::size_t i, double N) {
     EXPECT_NE(i / static_cast<std::size_t>(nn[0]), top_row);
     total += N * ff.f;
@@ -295,6 +296,7 @@ TEST(FaceForces, MasslessNodesGetNoShareAndTheResultantIsKept) {
   EXPECT_NEAR((total - ff.f).norm(), 0.0, 1e-14);
   // Every node loaded: the face point's own weights.
   double all = 0.0;
+  ff.scale = face_force_scale(g, ff, [](std::size_t) { return true; });
   for_each_loaded_node(g, ff, [](std::size_t) { return true; }, [&](std::size_t, double N) { all += N; });
   EXPECT_NEAR(all, 1.0, 1e-14);
 }
