@@ -13,7 +13,9 @@ fastest (noise on a shared machine only adds). Every 2-rank run's last frame is 
 1-rank run's (build/bench/frame_diff: points matched by id).
 
 Usage: bench/mpi_scaling.py [--swmpm build/app/swmpm] [--cells 60x20x20] [--steps 100] [--repeat 3]
+                            [--formulation dry|explicit-single-point]
                             [--out bench/results/mpi-scaling-<date>.md]
+explicit-single-point: the box saturated (porosity 0.4, water K_f = 2.2 GPa, impermeable faces).
 """
 import argparse, datetime, json, os, platform, subprocess, tempfile
 
@@ -21,11 +23,17 @@ MPI_ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CO
                OMPI_MCA_rmaps_base_oversubscribe="1")
 
 
-def scene(name, nx, ny, nz, steps, h=0.1):
+def scene(name, nx, ny, nz, steps, h=0.1, formulation="dry"):
     E, rho = 1.0e7, 2000.0
     dt = 0.4 * h / (E / rho) ** 0.5
+    if formulation == "explicit-single-point":
+        # Saturated (n = 0.4, water K_f = 2.2e9 Pa): the undrained P-wave sets dt,
+        # c = sqrt((K' + 4G/3 + K_f / n) / rho_sat).
+        nu, n, Kf, rho_s, rho_w = 0.3, 0.4, 2.2e9, 2650.0, 1000.0
+        M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) + Kf / n
+        dt = 0.4 * h / (M / ((1 - n) * rho_s + n * rho_w)) ** 0.5
     ext = [nx * h, ny * h, nz * h]
-    return {
+    sc = {
         "name": name, "dimension": 3, "formulation": "dry", "gravity": [0.0, -9.81, 0.0],
         "grid": {"cell_size": h, "min": [0.0, 0.0, 0.0], "max": [ext[0] + 2 * h, ext[1] + 2 * h, ext[2] + 2 * h],
                  "shape_function": "gimp"},
@@ -38,6 +46,15 @@ def scene(name, nx, ny, nz, steps, h=0.1):
         "time": {"end": steps * dt * (1 - 1e-9), "dt": dt},
         "output": {"interval": 0.0},
     }
+    if formulation == "explicit-single-point":
+        sc["formulation"] = formulation
+        sc["materials"] = [{"name": "m", "model": "linear-elastic", "grain_density": 2650.0, "porosity": 0.4,
+                            "youngs_modulus": E, "poisson_ratio": 0.3, "hydraulic_conductivity": 1e-4},
+                           {"name": "w", "model": "fluid", "density": 1000.0, "bulk_modulus": 2.2e9}]
+        sc["bodies"][0]["fluid"] = "w"
+        for b in sc["boundaries"]:
+            b["fluid"] = "impermeable"
+    return sc
 
 
 def prepare(swmpm, sc, work):
@@ -76,15 +93,17 @@ def main():
     ap.add_argument("--cells", default="60x20x20")
     ap.add_argument("--steps", type=int, default=100)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--formulation", default="dry", choices=["dry", "explicit-single-point"])
     ap.add_argument("--out", default="")
     a = ap.parse_args()
     nx, ny, nz = [int(v) for v in a.cells.split("x")]
     work = tempfile.mkdtemp(prefix="swmpm-mpi-")
-    base = prepare(a.swmpm, scene("box", nx, ny, nz, a.steps), work)
+    f = a.formulation
+    base = prepare(a.swmpm, scene("box", nx, ny, nz, a.steps, formulation=f), work)
     # Each rank count solves its own copy of the run directory (a solve replaces its outputs).
-    runs = {r: prepare(a.swmpm, scene(f"box-{r}", nx, ny, nz, a.steps), work) for r in (2, 4)}
+    runs = {r: prepare(a.swmpm, scene(f"box-{r}", nx, ny, nz, a.steps, formulation=f), work) for r in (2, 4)}
     weak1 = base
-    weak2 = prepare(a.swmpm, scene("box-weak", 2 * nx, ny, nz, a.steps), work)
+    weak2 = prepare(a.swmpm, scene("box-weak", 2 * nx, ny, nz, a.steps, formulation=f), work)
     t = {"strong1": [], "strong2": [], "weak2": [], "threads2": []}
     last = {}
     for _ in range(a.repeat):
@@ -108,7 +127,7 @@ def main():
         ("strong, 2 ranks", n1, 2, T2, best["strong2"], T1 / (2 * T2)),
         ("weak, 2 ranks (2x box)", nw, 2, W2, best["weak2"], T1 / W2),
     ]
-    lines = [f"# MPI scaling, 3D dry box (bench/mpi_scaling.py)", "",
+    lines = [f"# MPI scaling, 3D {'dry' if f == 'dry' else 'saturated (' + f + ')'} box (bench/mpi_scaling.py)", "",
              f"{datetime.date.today()}, {platform.node()}, {os.cpu_count()} cores, {a.cells} cells "
              f"(GIMP, 8 points per cell), {steps} steps, one thread per rank, fastest of {a.repeat} (interleaved).", "",
              "| case | particles | ranks (cores) | loop s | us per particle-step (x cores) | communication s, busiest rank: all (collectives / exchange / migration) | particles per rank | efficiency |",
