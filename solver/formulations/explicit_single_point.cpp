@@ -242,19 +242,12 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     else if (fast_drainage_) st.solid.v_f = st.solid.v, fast_drainage_ = false;
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
-  std::string on_several_ranks(const scene::Scene& s) const override {
-    if (s.solver.stabilisation.fbar == "modified")
-      return "solver.stabilisation.fbar \"modified\" does not run on several ranks yet (\"standard\" does)";
-    return {};
-  }
+  std::string on_several_ranks(const scene::Scene& s) const override { return parallel::refused_on_several_ranks(s); }
   std::vector<typename Formulation<Dim>::Counter> counters() const override {
-    std::vector<typename Formulation<Dim>::Counter> c;
-    domain_.add_counters(c);
-    return c;
+    return parallel::counters<typename Formulation<Dim>::Counter>(domain_);
   }
   void distribute(State<Dim>& st) override {
-    parallel::distribute<Shape>(domain_, grid_, st, schedule_);
-    regroup_by_material(st.solid, material_particles_);
+    parallel::distribute<Shape>(domain_, grid_, st, schedule_, material_particles_);
   }
   // Restart: the last step's schedule order, which the next step's reordering (0) reads; every
   // other field is rebuilt by each step from the particles.

@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "solver/formulation.hpp"
+#include "solver/formulations/registry.hpp"
 #include "solver/grid/grid.hpp"
 #include "solver/loads.hpp"
 #include "solver/parallel/domain.hpp"
@@ -42,6 +44,30 @@ void distribute(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedu
   if (schedule.built() && schedule.order().size() == whole) schedule.restore_order(local_order(schedule.order(), st.solid.key));
   schedule.set_exchange(d.exchange());
   st.index_ids();
+}
+
+/// distribute() for a formulation that groups its particles by material (regrouped after).
+template <class Shape, int Dim>
+void distribute(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedule& schedule,
+                std::vector<std::vector<int>>& material_particles) {
+  distribute<Shape>(d, g, st, schedule);
+  regroup_by_material(st.solid, material_particles);
+}
+
+/// What the explicit formulations cannot do on several ranks yet (Formulation::on_several_ranks):
+/// the modified F-bar's patch sums (a patch spans more than the two stripes of a cut).
+inline std::string refused_on_several_ranks(const scene::Scene& s) {
+  if (s.solver.stabilisation.fbar == "modified")
+    return "solver.stabilisation.fbar \"modified\" does not run on several ranks yet (\"standard\" does)";
+  return {};
+}
+
+/// The decomposition's counters (Domain::add_counters) as a formulation reports them.
+template <class Counter, int Dim>
+std::vector<Counter> counters(const Domain<Dim>& d) {
+  std::vector<Counter> c;
+  d.add_counters(c);
+  return c;
 }
 
 /// Step (1) under mpirun, after the shapes are evaluated: every kRebalanceInterval steps the cuts
