@@ -32,6 +32,10 @@ struct StripeExchange::Impl {
   // vectors and matrices on it.
   DM da = nullptr;
   mutable std::map<std::size_t, MPI_Datatype> types;  // a node's bytes as doubles
+  mutable std::map<int, PetscSF> ghosts;               // per ghost width: owners' nodes -> my ghosts
+  std::array<int, 3> nodes{1, 1, 1};
+  int axis = 0;
+  std::vector<int> column_cuts;  // per rank its first node column, then the node count
 
   MPI_Datatype type(std::size_t bytes) const {
     auto it = types.find(bytes);
@@ -44,6 +48,7 @@ struct StripeExchange::Impl {
   ~Impl() {
     DMDestroy(&da);
     for (auto* sf : {&leaf_first[0], &leaf_first[1], &root_first[0], &root_first[1]}) PetscSFDestroy(sf);
+    for (auto& [w, sf] : ghosts) PetscSFDestroy(&sf);
     for (auto& [b, t] : types) MPI_Type_free(&t);
   }
 };
@@ -53,6 +58,10 @@ StripeExchange::StripeExchange(const std::array<int, 3>& nodes, int axis, int wi
     : impl_(std::make_unique<Impl>()) {
   const int me = rank(), R = ranks();
   const PetscInt n_all = static_cast<PetscInt>(static_cast<std::size_t>(nodes[0]) * nodes[1] * nodes[2]);
+  impl_->nodes = nodes;
+  impl_->axis = axis;
+  for (int r = 0; r < R; ++r) impl_->column_cuts.push_back(cuts[static_cast<std::size_t>(r)] * width);
+  impl_->column_cuts.push_back(nodes[axis]);
   for (const Reach reach : {Reach::support, Reach::moved_cell}) {
     std::vector<PetscInt> leaves;
     std::vector<PetscSFNode> roots;
@@ -134,6 +143,49 @@ void StripeExchange::after_colour(int colour, void* nodes, std::size_t bytes, Re
     PetscSFBcastEnd(leaf_first, t, nodes, nodes, MPI_REPLACE);
     PetscSFReduceEnd(root_first, t, nodes, nodes, MPI_REPLACE);
   }
+  add_communication_seconds(MPI_Wtime() - t0, Traffic::exchange);
+}
+
+void StripeExchange::fill_ghosts(void* nodes, std::size_t bytes, int width) const {
+  const double t0 = MPI_Wtime();
+  const Impl& m = *impl_;
+  auto it = m.ghosts.find(width);
+  if (it == m.ghosts.end()) {
+    // Leaves: my ghost nodes (the columns within `width` of my own, either side); roots: the same
+    // nodes on the ranks that own their columns.
+    const int me = rank();
+    const int lo = m.column_cuts[static_cast<std::size_t>(me)], hi = m.column_cuts[static_cast<std::size_t>(me) + 1];
+    std::vector<PetscInt> leaves;
+    std::vector<PetscSFNode> roots;
+    auto owner = [&](int c) {
+      int r = 0;
+      while (m.column_cuts[static_cast<std::size_t>(r) + 1] <= c) ++r;
+      return r;
+    };
+    for (const auto& [first, last] : {std::pair{std::max(0, lo - width), lo}, std::pair{hi, std::min(m.nodes[m.axis], hi + width)}})
+      for (int c = first; c < last; ++c) {
+        std::array<int, 3> ijk{0, 0, 0}, from{0, 0, 0}, to{m.nodes[0], m.nodes[1], m.nodes[2]};
+        from[m.axis] = c, to[m.axis] = c + 1;
+        const int r = owner(c);
+        for (ijk[2] = from[2]; ijk[2] < to[2]; ++ijk[2])
+          for (ijk[1] = from[1]; ijk[1] < to[1]; ++ijk[1])
+            for (ijk[0] = from[0]; ijk[0] < to[0]; ++ijk[0]) {
+              const PetscInt i = ijk[0] + m.nodes[0] * (ijk[1] + static_cast<PetscInt>(m.nodes[1]) * ijk[2]);
+              leaves.push_back(i);
+              roots.push_back({r, i});
+            }
+      }
+    const PetscInt n_all = static_cast<PetscInt>(static_cast<std::size_t>(m.nodes[0]) * m.nodes[1] * m.nodes[2]);
+    PetscSF sf;
+    petsc(PetscSFCreate(PETSC_COMM_WORLD, &sf));
+    petsc(PetscSFSetGraph(sf, n_all, static_cast<PetscInt>(leaves.size()), leaves.data(), PETSC_COPY_VALUES, roots.data(),
+                          PETSC_COPY_VALUES));
+    petsc(PetscSFSetUp(sf));
+    it = m.ghosts.emplace(width, sf).first;
+  }
+  const MPI_Datatype t = m.type(bytes);
+  petsc(PetscSFBcastBegin(it->second, t, nodes, nodes, MPI_REPLACE));
+  petsc(PetscSFBcastEnd(it->second, t, nodes, nodes, MPI_REPLACE));
   add_communication_seconds(MPI_Wtime() - t0, Traffic::exchange);
 }
 

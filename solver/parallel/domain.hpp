@@ -56,6 +56,11 @@ class StripeExchange final : public NodeExchange {
   void after_colour(int colour, void* nodes, std::size_t bytes, Reach reach) const override;
   /// The node columns [first, second) this rank owns along the axis, as PETSc's DMDA holds them.
   std::pair<int, int> owned_columns() const { return owned_; }
+  /// Copies into this rank's `width` node columns either side of its own (ghosts; clamped to the
+  /// grid) their owners' values: after a per-node stage that each rank runs on its own nodes, the
+  /// values its neighbour reads R nodes away (a stencil's reach). `nodes` as after_colour's; one
+  /// PETSc star forest per width, built at its first use. Collective.
+  void fill_ghosts(void* nodes, std::size_t bytes, int width) const;
 
  private:
   std::pair<int, int> owned_{0, 0};
@@ -218,6 +223,12 @@ class Domain {
   /// above, [first, last].
   std::pair<int, int> box_columns() const {
     return {cuts_[rank()] * width_, std::min(nodes_[axis_] - 1, cuts_[rank() + 1] * width_ + support_ - 2)};
+  }
+
+  /// StripeExchange::fill_ghosts of a node array (nothing at one rank). Collective.
+  template <class NodeArrayT>
+  void fill_ghosts(NodeArrayT& nodes, int width) const {
+    if (active()) exchange_->fill_ghosts(nodes.data(), sizeof(nodes[0]), width);
   }
 
   /// Re-cuts for an equal particle count per rank when the counts differ by more than

@@ -150,6 +150,38 @@ TEST(Domain, GatherSetGivesRankZeroTheWholeSetInTheOneRankOrder) {
   }
 }
 
+TEST(Domain, GhostColumnsGetTheirOwnersValues) {
+  // Each rank writes f(node) on its own columns and garbage elsewhere; fill_ghosts(w) brings the
+  // owners' values into the w columns either side (what a stencil of reach w reads).
+  const Grid<2> g = grid();
+  ParticleSet<2> mine = cloud(4000);
+  Domain<2> d;
+  const int axis = transfer::stripe_axis(g);
+  d.distribute(g, S, axis, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
+  if (!d.active()) GTEST_SKIP() << "one rank";
+  const int lo = d.cuts()[static_cast<std::size_t>(rank())] * d.width();
+  const int hi = std::min(g.nodes_per_axis()[axis], d.cuts()[static_cast<std::size_t>(rank()) + 1] * d.width());
+  auto f = [](std::size_t i) { return std::array<double, 2>{1.0 + static_cast<double>(i), -0.5 * static_cast<double>(i)}; };
+  for (const int w : {2, 4}) {
+    NodeArray<std::array<double, 2>> a(g.num_nodes());
+    long wrong = 0, ghosts = 0;
+    g.for_each_node(g.all_nodes(), [&](std::size_t i, const auto& ijk) {
+      a[i] = ijk[axis] >= lo && ijk[axis] < hi ? f(i) : std::array<double, 2>{-7.0, -7.0};
+    });
+    d.fill_ghosts(a, w);
+    g.for_each_node(g.all_nodes(), [&](std::size_t i, const auto& ijk) {
+      const int c = ijk[axis];
+      const bool ghost = (c >= lo - w && c < lo) || (c >= hi && c < hi + w);
+      const bool own = c >= lo && c < hi;
+      if (ghost) ++ghosts;
+      if ((own || ghost) && a[i] != f(i)) ++wrong;
+      if (!own && !ghost && a[i][0] != -7.0) ++wrong;  // and nothing beyond
+    });
+    EXPECT_EQ(wrong, 0) << "width " << w << ", rank " << rank();
+    EXPECT_GT(ghosts, 0);
+  }
+}
+
 /// A grid and a point cloud in Dim dimensions for the Poisson tests: [0, 3] x [0, 1] (2D) or
 /// [0, 1.5] x [0, 0.5] x [0, 0.5] (3D), points uniform over the inner 80 % along x and over
 /// [0.1, top - 0.1] along the others, volumes of many magnitudes.
