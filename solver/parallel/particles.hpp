@@ -73,8 +73,7 @@ std::vector<Counter> counters(const Domain<Dim>& d) {
 
 /// Step (1) under mpirun, after the shapes are evaluated: every kRebalanceInterval steps the cuts
 /// move to even out the particle counts; particles whose stripe another rank owns move there
-/// (the kept points' shape data move with them, the arrivals' are evaluated, the box and `bad`
-/// follow); then the rank's node box. Returns
+/// (their shapes, the box and `bad` are evaluated again); then the rank's node box. Returns
 /// whether this rank's particles changed (the caller regroups what indexes them).
 template <class Shape, int Dim, int S>
 bool own_particles(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedule& schedule,
