@@ -193,7 +193,7 @@ void StripeExchange::fill_ghosts(void* nodes, std::size_t bytes, int width) cons
 
 template <int Dim>
 bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout,
-                    std::vector<std::max_align_t>& scratch, std::vector<int>* source) {
+                    std::vector<std::max_align_t>& scratch) {
   const double t0 = MPI_Wtime();
   const int R = ranks(), me = rank();
   const std::size_t n = ps.size();
@@ -324,10 +324,6 @@ bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const Fi
       std::copy(tmp, tmp + n_new, f.begin());
     });
   }
-  if (source) {
-    source->resize(n_new);
-    for (std::size_t j = 0; j < n_new; ++j) (*source)[j] = order[j] >= 0 ? order[j] : -1;
-  }
   add_communication_seconds(MPI_Wtime() - t0, Traffic::migration);
   return true;
 }
@@ -371,10 +367,8 @@ std::vector<int> gather_order(const std::vector<int>& order, const ParticleSet<D
   return whole;
 }
 
-template bool move_particles<2>(ParticleSet<2>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&,
-                                std::vector<int>*);
-template bool move_particles<3>(ParticleSet<3>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&,
-                                std::vector<int>*);
+template bool move_particles<2>(ParticleSet<2>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&);
+template bool move_particles<3>(ParticleSet<3>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&);
 template ParticleSet<2> gather_set<2>(const ParticleSet<2>&);
 template ParticleSet<3> gather_set<3>(const ParticleSet<3>&);
 template std::vector<int> gather_order<2>(const std::vector<int>&, const ParticleSet<2>&, const std::vector<std::int64_t>&);

@@ -89,11 +89,10 @@ void compact(ParticleSet<Dim>& ps, const std::vector<int>& keep, const FieldByte
 /// Moves particle p of `ps` to rank dest[p] (the fields `layout` marks), in one all-to-all;
 /// the set is then in key order (the kept particles and each rank's arrivals are; their keys are
 /// merged, and each field is rebuilt in one pass through `scratch`, kept by the caller). Collective.
-/// Returns whether this rank's set changed; then `source` (if given) says where each particle of
-/// the new set comes from: its former index, or -1 for an arrival.
+/// Returns whether this rank's set changed.
 template <int Dim>
 bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout,
-                    std::vector<std::max_align_t>& scratch, std::vector<int>* source = nullptr);
+                    std::vector<std::max_align_t>& scratch);
 
 /// Every rank's particles of a set, on rank 0, in key order: the one-rank run's set in its storage
 /// order (the others get an empty set). Collective. For what is measured once per frame over the
@@ -184,7 +183,7 @@ class Domain {
 
   /// Moves every particle of set k whose first node along the axis (first_node(p)) lies in
   /// another rank's stripes to that rank; the set stays in key order. Collective. Returns whether
-  /// this rank's set changed; then source() maps the new set to the former (move_particles).
+  /// this rank's set changed.
   template <class FirstNode>
   bool migrate(std::size_t k, ParticleSet<Dim>& ps, FirstNode&& first_node) {
     if (!active()) return false;
@@ -193,10 +192,8 @@ class Domain {
       dest_[p] = owner(first_node(p) / width_);
       migrated_ += dest_[p] != rank();
     }
-    return parallel::move_particles(ps, dest_, layouts_.at(k), scratch_, &source_);
+    return move_particles(ps, dest_, layouts_.at(k));
   }
-  /// After a migrate() that changed the set: per particle, its index before, or -1 (arrived).
-  const std::vector<int>& source() const { return source_; }
 
   /// The keys after the one-rank run's reordering (reorder_for_locality): a rank's particles, now
   /// in its schedule order, follow those of the ranks before it.
@@ -302,13 +299,17 @@ class Domain {
     return l;
   }
 
+  bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout) {
+    return parallel::move_particles(ps, dest, layout, scratch_);
+  }
+
   int axis_ = 0, width_ = 1, support_ = 1, stripes_ = 1;
   std::array<int, 3> nodes_{1, 1, 1};
   std::vector<int> cuts_;
   std::vector<int> owner_;  // per stripe: its rank
   std::unique_ptr<StripeExchange> exchange_;
   std::vector<FieldBytes> layouts_;
-  std::vector<int> dest_, source_;
+  std::vector<int> dest_;
   std::vector<std::max_align_t> scratch_;  // migration's rebuild of each field
   int rebalances_ = 0;
   long migrated_ = 0;  // this rank's particles sent away

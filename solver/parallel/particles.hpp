@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -89,31 +88,7 @@ bool own_particles(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSch
   const bool changed = d.migrate(0, ps, [&](std::size_t p) { return sd[p].base[axis]; });
   if (changed) {
     st.index_ids();
-    if (bad >= 0) {
-      box = transfer::evaluate_shapes<Shape>(g, ps, sd, bad);  // a failing step: every point again, for the diagnosis
-    } else {
-      // The kept points' shape data move with them; only the arrivals are evaluated (the same
-      // call evaluate_shapes makes per point: the same bits).
-      static thread_local std::vector<shape::ShapeData<Dim, S>> moved;
-      const std::vector<int>& from = d.source();
-      moved.resize(from.size());
-      const Vec<Dim> lo = g.min(), hi = g.max();
-      const long n = static_cast<long>(from.size());
-      long first_bad = transfer::no_particle;
-#pragma omp parallel for schedule(static) reduction(min : first_bad) if (n > parallel_threshold)
-      for (long j = 0; j < n; ++j) {
-        const int f = from[static_cast<std::size_t>(j)];
-        if (f >= 0) moved[static_cast<std::size_t>(j)] = sd[static_cast<std::size_t>(f)];
-        else if (!transfer::evaluate_point<Shape>(g, lo, hi, ps.x[j], ps.l[j], moved[static_cast<std::size_t>(j)]))
-          first_bad = std::min(first_bad, j);
-      }
-      if (first_bad != transfer::no_particle) bad = first_bad;
-      sd.swap(moved);
-      box.lo.fill(std::numeric_limits<int>::max());
-      box.hi.fill(std::numeric_limits<int>::min());
-      for (const auto& s : sd)
-        for (int a = 0; a < Dim; ++a) box.lo[a] = std::min(box.lo[a], s.base[a]), box.hi[a] = std::max(box.hi[a], s.base[a] + S - 1);
-    }
+    box = transfer::evaluate_shapes<Shape>(g, ps, sd, bad);
   }
   box = d.node_box(box);
   return changed;
