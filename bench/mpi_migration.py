@@ -48,11 +48,7 @@ def main():
         lines.append(f"| {name} ({exe}) | {best['loop_seconds']:.3f} | {stages.get('shape functions', float('nan')):.3f} | "
                      f"{best['counters'].get('particles migrated', 0):.0f} | "
                      f"{1e6 * best['loop_seconds'] * 2 / (n * best['steps']):.3f} |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if a.out:
-        with open(a.out, "w") as f:
-            f.write(text)
+    mpi_scaling.emit("\n".join(lines) + "\n", a.out)
 
 
 if __name__ == "__main__":

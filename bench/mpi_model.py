@@ -28,6 +28,8 @@ Usage: bench/mpi_model.py --us-per-particle-step 0.45 [--alpha 1.5e-6] [--beta 1
 """
 import argparse, math
 
+import mpi_scaling
+
 
 def step_time(n_r, P, cross_nodes, c_us, alpha, beta, S=3, node_bytes=56, particle_bytes=420,
               crossing_fraction=0.0, k_x=4, k_r=6, imbalance=1.05):
@@ -142,11 +144,7 @@ def main():
               "percent of the step. Against one rank's own path (CHOLMOD's factor reused as CG's preconditioner, "
               "0.19 s per step at 30,000 nodes here), BoomerAMG's setup every step is the cost to cut (reuse its setup "
               "across steps as the one-rank path reuses its factor)."]
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if a.out:
-        with open(a.out, "w") as f:
-            f.write(text)
+    mpi_scaling.emit("\n".join(lines) + "\n", a.out)
 
 
 if __name__ == "__main__":

@@ -75,6 +75,14 @@ def solve(swmpm, rd, ranks, threads=1):
         return json.load(f)
 
 
+def emit(text, out=""):
+    """Prints a report and writes it to `out` (if given)."""
+    print(text)
+    if out:
+        with open(out, "w") as f:
+            f.write(text)
+
+
 def last_frame(rd):
     with open(os.path.join(rd, "output", "results.pvd")) as f:
         files = [l.split('file="')[1].split('"')[0] for l in f if 'file="' in l]
@@ -142,11 +150,7 @@ def main():
               f"2 ranks {same(a.frame_diff, last_frame(base), last_frame(runs[2]))}, "
               f"4 ranks oversubscribed {same(a.frame_diff, last_frame(base), last_frame(runs[4]))} "
               f"(4 ranks: {four['particles_per_rank']['each']} particles, a correctness check only)."]
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if a.out:
-        with open(a.out, "w") as f:
-            f.write(text)
+    emit("\n".join(lines) + "\n", a.out)
 
 
 if __name__ == "__main__":
