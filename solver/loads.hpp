@@ -12,6 +12,7 @@
 #include "solver/grid/grid.hpp"
 #include "solver/particles/particles.hpp"
 #include "solver/shape/shape.hpp"
+#include "solver/transfer/transfer.hpp"
 
 namespace swmpm {
 
@@ -200,6 +201,26 @@ void for_each_loaded_node(const Grid<Dim>& g, const FaceForce<Dim, S>& ff, HasMa
   shape::for_each_node(g, ff.sd, [&](std::size_t i, double N, const Vec<Dim>&) {
     if (has_mass(i)) fn(i, N * ff.scale);
   });
+}
+
+/// The nodes of `nodes` that carry mass (transfer::empty_node_mass), as for_each_loaded_node
+/// reads them.
+template <int Dim>
+auto carries_mass(const NodeFields<Dim>& nodes) {
+  return [&nodes](std::size_t i) { return nodes.acc[i].m > transfer::empty_node_mass; };
+}
+/// The face forces, once weighed (weigh_face_forces), added to the nodal forces of `nodes` in the
+/// loads' order (after the scatter of the masses).
+template <int Dim, int S>
+void add_weighed_face_forces(const Grid<Dim>& g, const std::vector<FaceForce<Dim, S>>& ffs, NodeFields<Dim>& nodes) {
+  for (const auto& ff : ffs)
+    for_each_loaded_node(g, ff, carries_mass(nodes), [&](std::size_t i, double N) { nodes.acc[i].f += N * ff.f; });
+}
+/// weigh_face_forces on the masses of `nodes`, then add_weighed_face_forces (one rank).
+template <int Dim, int S>
+void add_face_forces(const Grid<Dim>& g, std::vector<FaceForce<Dim, S>>& ffs, NodeFields<Dim>& nodes) {
+  weigh_face_forces(g, ffs, carries_mass(nodes));
+  add_weighed_face_forces(g, ffs, nodes);
 }
 
 /// Face index 2 * axis + side of a face name x_min .. z_max.

@@ -757,18 +757,10 @@ class Runner {
         const std::string solid_file = pieces("solid", 0);
         const std::string fluid_file = fluid_set ? pieces("fluid", 1) : std::string();
         parallel::barrier();
-        std::exception_ptr failed;
-        try {
+        write_on_every_rank(solid_file, "another rank could not write its piece", [&] {
           scene::write_pvtu_piece(solid_file, solid, parallel::rank(), R, compression_);
           if (fluid_set) scene::write_pvtu_piece(fluid_file, fluid, parallel::rank(), R, compression_);
-        } catch (const files::WriteError&) {
-          failed = std::current_exception();
-        }
-        if (parallel::any(failed != nullptr)) {
-          all_ranks_failed_ = true;
-          if (failed) std::rethrow_exception(failed);
-          throw files::WriteError(solid_file, "another rank could not write its piece");
-        }
+        });
       } else {
         scene::write_vtu(file("solid", 0), solid, compression_);
         if (fluid_set) scene::write_vtu(file("fluid", 1), fluid, compression_);
@@ -837,19 +829,20 @@ class Runner {
   /// state (Checkpoint::put_order) as positions in its gathered set. The other ranks get the
   /// header only. Collective.
   void take_whole_snapshot(Checkpoint& c) const {
-    Checkpoint mine;
-    take_snapshot(mine);
+    Checkpoint mine;  // the formulation's state only: the sets are gathered below
+    f_->save(mine);
     const ParticleSet<Dim> solid = parallel::gather_set(state_.solid), fluid = parallel::gather_set(state_.fluid);
     c.clear();
     c.header = mine.header;
     c.header.erase("particle_orders");
     c.header.erase("global_arrays");
+    c.header["step"] = state_.step;
+    c.header["time"] = state_.time;
     save_set(c, "solid", solid);
     save_set(c, "fluid", fluid);
     const auto orders = mine.header.value("particle_orders", nlohmann::ordered_json::object());
     const auto global = mine.header.value("global_arrays", nlohmann::ordered_json::object());
     for (const auto& name : mine.names()) {
-      if (name.rfind("solid/", 0) == 0 || name.rfind("fluid/", 0) == 0) continue;
       if (global.contains(name)) {  // the same on every rank
         c.copy_array(mine, name);
         c.header["global_arrays"][name] = true;
@@ -870,6 +863,24 @@ class Runner {
     restore_set(c, "fluid", state_.fluid);
     state_.index_ids();
     f_->restore(c, state_);
+  }
+
+  /// Runs write(); under mpirun every rank learns whether any rank's write failed
+  /// (files::WriteError), and then all throw: the failing rank its own error, the others one
+  /// naming `file` with `elsewhere`. The run then ends in order on every rank (status failed).
+  template <class Write>
+  void write_on_every_rank(const std::string& file, const char* elsewhere, Write&& write) {
+    if (!parallel::distributed()) return write();
+    std::exception_ptr failed;
+    try {
+      write();
+    } catch (const files::WriteError&) {
+      failed = std::current_exception();
+    }
+    if (!parallel::any(failed != nullptr)) return;
+    all_ranks_failed_ = true;
+    if (failed) std::rethrow_exception(failed);
+    throw files::WriteError(file, elsewhere);
   }
 
   /// RUN_DIR/checkpoint.bin (solver/output/checkpoint.hpp), replaced atomically.
@@ -896,24 +907,12 @@ class Runner {
     loop["monitor_bytes"] = monitors_->bytes();
     loop["stability"] = stability_.json();
     c.header["loop"] = loop;
-    if (parallel::distributed()) {
-      // Rank 0 writes; a failure stops every rank in order (as a frame's piece does).
-      std::exception_ptr failed;
-      if (root()) try {
-          run_dir_.claim("checkpoint.bin");
-          c.write(dir_ / "checkpoint.bin");
-        } catch (const files::WriteError&) {
-          failed = std::current_exception();
-        }
-      if (parallel::any(failed != nullptr)) {
-        all_ranks_failed_ = true;
-        if (failed) std::rethrow_exception(failed);
-        throw files::WriteError((dir_ / "checkpoint.bin").string(), "rank 0 could not write it");
-      }
-    } else {
+    // Under mpirun rank 0 writes; a failure stops every rank in order (as a frame's piece does).
+    write_on_every_rank((dir_ / "checkpoint.bin").string(), "rank 0 could not write it", [&] {
+      if (!root()) return;
       run_dir_.claim("checkpoint.bin");
       c.write(dir_ / "checkpoint.bin");
-    }
+    });
     checkpoint_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++checkpoints_;
   }

@@ -71,10 +71,8 @@ class Dry final : public Formulation<Dim> {
     transfer::clear_nodes(grid_, box_, nodes_);
 
     transfer::scatter_mass_momentum_force(grid_, schedule_, ps, sd_, b, nodes_);       // (2)
-    auto loaded = [&](std::size_t i) { return nodes_.acc[i].m > transfer::empty_node_mass; };      // (3)
-    parallel::weigh_face_forces(domain_, grid_, face_forces_, loaded);
-    for (const auto& ff : face_forces_)
-      for_each_loaded_node(grid_, ff, loaded, [&](std::size_t i, double N) { nodes_.acc[i].f += N * ff.f; });
+    parallel::weigh_face_forces(domain_, grid_, face_forces_, carries_mass(nodes_));      // (3)
+    add_weighed_face_forces(grid_, face_forces_, nodes_);
     lap("p2g");
 
     update_grid(dt);                                                                    // (4)

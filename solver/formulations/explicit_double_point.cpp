@@ -165,10 +165,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
     scatter_solid(ps, b);                                                                    // (2b)
     nodal_porosity();
     scatter_liquid_forces(ws, b);                                                            // (2c)
-    auto loaded = [&](std::size_t i) { return solid_.acc[i].m > transfer::empty_node_mass; };
-    weigh_face_forces(grid_, face_forces_, loaded);
-    for (const auto& ff : face_forces_)
-      for_each_loaded_node(grid_, ff, loaded, [&](std::size_t i, double N) { solid_.acc[i].f += N * ff.f; });
+    add_face_forces(grid_, face_forces_, solid_);
     lap("p2g");
 
     update_grid(dt);                                                                         // (3)

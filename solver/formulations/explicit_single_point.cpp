@@ -129,7 +129,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     if (cell_pressure_ || conservative_) lap("cell pressure and nodal porosity");
 
     scatter_both_phases(ps, b);                                                          // (2)
-    auto loaded = [&](std::size_t i) { return solid_.acc[i].m > transfer::empty_node_mass; };
+    const auto loaded = carries_mass(solid_);
     parallel::weigh_face_forces(domain_, grid_, face_forces_, loaded);
     for (const auto& ff : face_forces_) {
       // A prescribed pore pressure (split) loads both phases, (1 - n) and n of -p A n.

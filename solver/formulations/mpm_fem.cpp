@@ -706,10 +706,7 @@ class MpmFem final : public Formulation<Dim> {
     transfer::build_schedule(grid_, sd_, schedule_);
     transfer::clear_nodes(grid_, box_, solid_);
     transfer::scatter_mass_momentum_force(grid_, schedule_, ps, sd_, b, solid_);
-    auto loaded = [&](std::size_t i) { return solid_.acc[i].m > transfer::empty_node_mass; };
-    weigh_face_forces(grid_, face_forces_, loaded);
-    for (const auto& ff : face_forces_)
-      for_each_loaded_node(grid_, ff, loaded, [&](std::size_t i, double N) { solid_.acc[i].f += N * ff.f; });
+    add_face_forces(grid_, face_forces_, solid_);
     // theta, n and k (eqs. 78, 79, 81)
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { sums_[i] = SoilSums{}; });
     schedule_.run([&](int p) {

@@ -18,6 +18,23 @@ namespace {
 void petsc(PetscErrorCode code) {
   if (code != 0) throw std::runtime_error("PETSc error " + std::to_string(static_cast<int>(code)) + " (see above)");
 }
+/// The nodes of node columns [first, last) along `axis` (all across): leaves here, the same
+/// nodes on rank `owner_of(column)` as roots, for a star forest.
+template <class OwnerOf>
+void add_columns(const std::array<int, 3>& nodes, int axis, int first, int last, OwnerOf&& owner_of,
+                 std::vector<PetscInt>& leaves, std::vector<PetscSFNode>& roots) {
+  for (int c = first; c < last; ++c) {
+    std::array<int, 3> ijk{0, 0, 0}, from{0, 0, 0}, to{nodes[0], nodes[1], nodes[2]};
+    from[axis] = c, to[axis] = c + 1;
+    const int r = owner_of(c);
+    for (ijk[2] = from[2]; ijk[2] < to[2]; ++ijk[2])
+      for (ijk[1] = from[1]; ijk[1] < to[1]; ++ijk[1])
+        for (ijk[0] = from[0]; ijk[0] < to[0]; ++ijk[0]) {
+          leaves.push_back(ijk[0] + nodes[0] * (ijk[1] + static_cast<PetscInt>(nodes[1]) * ijk[2]));
+          roots.push_back({r, leaves.back()});
+        }
+  }
+}
 }  // namespace
 
 // ---- the exchange of shared columns ------------------------------------------------------------
@@ -72,15 +89,7 @@ StripeExchange::StripeExchange(const std::array<int, 3>& nodes, int axis, int wi
       odd = s % 2 == 1;
       const int first = s * width - (reach == Reach::moved_cell ? 1 : 0);
       const int last = std::min(nodes[axis] - 1, s * width + support - 2);
-      std::array<int, 3> ijk{0, 0, 0}, lo{0, 0, 0}, hi{nodes[0] - 1, nodes[1] - 1, nodes[2] - 1};
-      lo[axis] = first, hi[axis] = last;
-      for (ijk[2] = lo[2]; ijk[2] <= hi[2]; ++ijk[2])
-        for (ijk[1] = lo[1]; ijk[1] <= hi[1]; ++ijk[1])
-          for (ijk[0] = lo[0]; ijk[0] <= hi[0]; ++ijk[0]) {
-            const PetscInt i = ijk[0] + nodes[0] * (ijk[1] + static_cast<PetscInt>(nodes[1]) * ijk[2]);
-            leaves.push_back(i);
-            roots.push_back({me + 1, i});
-          }
+      add_columns(nodes, axis, first, last + 1, [&](int) { return me + 1; }, leaves, roots);
     }
     auto make = [&](PetscSF& sf, bool mine) {
       petsc(PetscSFCreate(PETSC_COMM_WORLD, &sf));
@@ -162,19 +171,8 @@ void StripeExchange::fill_ghosts(void* nodes, std::size_t bytes, int width) cons
       while (m.column_cuts[static_cast<std::size_t>(r) + 1] <= c) ++r;
       return r;
     };
-    for (const auto& [first, last] : {std::pair{std::max(0, lo - width), lo}, std::pair{hi, std::min(m.nodes[m.axis], hi + width)}})
-      for (int c = first; c < last; ++c) {
-        std::array<int, 3> ijk{0, 0, 0}, from{0, 0, 0}, to{m.nodes[0], m.nodes[1], m.nodes[2]};
-        from[m.axis] = c, to[m.axis] = c + 1;
-        const int r = owner(c);
-        for (ijk[2] = from[2]; ijk[2] < to[2]; ++ijk[2])
-          for (ijk[1] = from[1]; ijk[1] < to[1]; ++ijk[1])
-            for (ijk[0] = from[0]; ijk[0] < to[0]; ++ijk[0]) {
-              const PetscInt i = ijk[0] + m.nodes[0] * (ijk[1] + static_cast<PetscInt>(m.nodes[1]) * ijk[2]);
-              leaves.push_back(i);
-              roots.push_back({r, i});
-            }
-      }
+    add_columns(m.nodes, m.axis, std::max(0, lo - width), lo, owner, leaves, roots);
+    add_columns(m.nodes, m.axis, hi, std::min(m.nodes[m.axis], hi + width), owner, leaves, roots);
     const PetscInt n_all = static_cast<PetscInt>(static_cast<std::size_t>(m.nodes[0]) * m.nodes[1] * m.nodes[2]);
     PetscSF sf;
     petsc(PetscSFCreate(PETSC_COMM_WORLD, &sf));

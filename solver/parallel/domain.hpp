@@ -225,6 +225,15 @@ class Domain {
     return {cuts_[rank()] * width_, std::min(nodes_[axis_] - 1, cuts_[rank() + 1] * width_ + support_ - 2)};
   }
 
+  /// The first node column of every rank along the axis, then the node count (parallel::GridPoisson's
+  /// cuts).
+  std::vector<int> column_cuts() const {
+    std::vector<int> c;
+    for (int r = 0; r < ranks(); ++r) c.push_back(cuts_[static_cast<std::size_t>(r)] * width_);
+    c.push_back(nodes_[axis_]);
+    return c;
+  }
+
   /// StripeExchange::fill_ghosts of a node array (nothing at one rank). Collective.
   template <class NodeArrayT>
   void fill_ghosts(NodeArrayT& nodes, int width) const {

@@ -63,8 +63,8 @@ class GridPoisson {
   enum Role : std::uint8_t { inactive = 0, unknown = 1, prescribed = 2 };
 
   /// `column_cuts`: the first node column of every rank along `axis`, then the node count.
-  GridPoisson(const std::array<int, Dim>& nodes, int axis, std::vector<int> column_cuts)
-      : nodes_(nodes), axis_(axis), cuts_(std::move(column_cuts)) {
+  GridPoisson(const Grid<Dim>& g, int axis, std::vector<int> column_cuts)
+      : grid_(g), nodes_(g.nodes_per_axis()), axis_(axis), cuts_(std::move(column_cuts)) {
     long across = 1;
     for (int a = 0; a < Dim; ++a)
       if (a != axis_) across *= nodes_[a];
@@ -156,20 +156,13 @@ class GridPoisson {
   /// fn(flat index, ijk) over the nodes of columns [lo, hi) along the axis, all across.
   template <class Fn>
   void for_each_node(int lo, int hi, Fn&& fn) const {
-    std::array<int, Dim> first{}, last{};
-    for (int a = 0; a < Dim; ++a) first[a] = a == axis_ ? lo : 0, last[a] = a == axis_ ? hi : nodes_[a];
-    if (lo >= hi) return;
-    std::array<int, Dim> ijk = first;
-    while (true) {
-      std::size_t i = 0;
-      for (int a = Dim - 1; a >= 0; --a) i = i * static_cast<std::size_t>(nodes_[a]) + static_cast<std::size_t>(ijk[a]);
-      fn(i, ijk);
-      int a = 0;
-      while (a < Dim && ++ijk[a] == last[a]) ijk[a] = first[a], ++a;
-      if (a == Dim) break;
-    }
+    NodeBox<Dim> columns;
+    for (int a = 0; a < Dim; ++a) columns.lo[a] = 0, columns.hi[a] = nodes_[a] - 1;
+    columns.lo[axis_] = lo, columns.hi[axis_] = hi - 1;
+    if (lo < hi) grid_.for_each_node(columns, fn);
   }
 
+  const Grid<Dim>& grid_;
   std::array<int, Dim> nodes_;
   int axis_;
   std::vector<int> cuts_;

@@ -47,6 +47,15 @@ ParticleSet<2> cloud(std::size_t n) {
   return ps;
 }
 
+/// The decomposition of `mine` (every rank's copy of the whole set) along the stripe axis: each
+/// rank keeps its own points. Returns the axis.
+template <int Dim>
+int split(Domain<Dim>& d, const Grid<Dim>& g, ParticleSet<Dim>& mine) {
+  const int axis = transfer::stripe_axis(g);
+  d.distribute(g, S, axis, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
+  return axis;
+}
+
 /// sum_p N_ip m_p through the stripe schedule, into a node array cleared over `box`.
 NodeArray<double> scatter(const Grid<2>& g, const ParticleSet<2>& ps, StripeSchedule& schedule, NodeBox<2>& box) {
   std::vector<shape::ShapeData<2, S>> sd;
@@ -69,8 +78,7 @@ TEST(Domain, SharedColumnsGetTheOneRankSumBitForBit) {
 
   ParticleSet<2> mine = all;
   Domain<2> d;
-  const int axis = transfer::stripe_axis(g);
-  d.distribute(g, S, axis, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
+  split(d, g, mine);
   EXPECT_EQ(sum(static_cast<long>(mine.size())), 4000);
   EXPECT_TRUE(std::is_sorted(mine.key.begin(), mine.key.end()));
   StripeSchedule schedule;
@@ -134,8 +142,7 @@ TEST(Domain, GatherSetGivesRankZeroTheWholeSetInTheOneRankOrder) {
   const Grid<2> g = grid();
   ParticleSet<2> mine = cloud(2000);
   Domain<2> d;
-  const int axis = transfer::stripe_axis(g);
-  d.distribute(g, S, axis, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
+  split(d, g, mine);
   const ParticleSet<2> whole = gather_set(mine);
   if (rank() != 0) {
     EXPECT_EQ(whole.size(), 0u);
@@ -156,11 +163,10 @@ TEST(Domain, GhostColumnsGetTheirOwnersValues) {
   const Grid<2> g = grid();
   ParticleSet<2> mine = cloud(4000);
   Domain<2> d;
-  const int axis = transfer::stripe_axis(g);
-  d.distribute(g, S, axis, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
+  const int axis = split(d, g, mine);
   if (!d.active()) GTEST_SKIP() << "one rank";
-  const int lo = d.cuts()[static_cast<std::size_t>(rank())] * d.width();
-  const int hi = std::min(g.nodes_per_axis()[axis], d.cuts()[static_cast<std::size_t>(rank()) + 1] * d.width());
+  const std::vector<int> columns = d.column_cuts();
+  const int lo = columns[static_cast<std::size_t>(rank())], hi = columns[static_cast<std::size_t>(rank()) + 1];
   auto f = [](std::size_t i) { return std::array<double, 2>{1.0 + static_cast<double>(i), -0.5 * static_cast<double>(i)}; };
   for (const int w : {2, 4}) {
     NodeArray<std::array<double, 2>> a(g.num_nodes());
@@ -331,17 +337,13 @@ PoissonComparison compare_poisson(double h, std::size_t points) {
   // The ranks' answer.
   ParticleSet<Dim> mine = all;
   Domain<Dim> d;
-  const int axis = transfer::stripe_axis(g);
-  d.distribute(g, S, axis, {&mine}, [&](std::size_t, std::size_t p) { return first_node<Shape>(g, mine.x[p], mine.l[p], axis); });
+  const int axis = split(d, g, mine);
   StripeSchedule schedule;
   schedule.set_exchange(d.exchange());
   NodeBox<Dim> box;
   Rows rows = assemble(g, mine, schedule, box, &d);
-  std::vector<int> column_cuts;  // one rank (mpirun -n 1): all columns
-  for (int r = 0; r < ranks() && d.active(); ++r) column_cuts.push_back(d.cuts()[static_cast<std::size_t>(r)] * d.width());
-  if (!d.active()) column_cuts.push_back(0);
-  column_cuts.push_back(g.nodes_per_axis()[axis]);
-  GridPoisson<Dim, R> poisson(g.nodes_per_axis(), axis, column_cuts);
+  // One rank (mpirun -n 1): all columns.
+  GridPoisson<Dim, R> poisson(g, axis, d.active() ? d.column_cuts() : std::vector<int>{0, g.nodes_per_axis()[axis]});
   const double t0 = wall_time();
   out.stats = poisson.solve(rows.stencil.data()->data(), rows.rhs.data(), rows.role.data(), rows.dp.data(), R, 1e-10);
   out.seconds = max(wall_time() - t0);

@@ -197,10 +197,7 @@ class Core : public Formulation<Dim> {
   }
   /// (3) Tractions on the soil (no pore-pressure loads: see loads_).
   void add_face_forces() {
-    auto loaded = [&](std::size_t i) { return soil_.acc[i].m > transfer::empty_node_mass; };
-    weigh_face_forces(grid_, face_forces_, loaded);
-    for (const auto& ff : face_forces_)
-      for_each_loaded_node(grid_, ff, loaded, [&](std::size_t i, double N) { soil_.acc[i].f += N * ff.f; });
+    swmpm::add_face_forces(grid_, face_forces_, soil_);
   }
   /// (3) The water's nodal velocity v_w^t = M_w v_w / M_w from the scattered sums (0 where none).
   void nodal_water_velocity() {
