@@ -225,6 +225,9 @@ class Domain {
     return {cuts_[rank()] * width_, std::min(nodes_[axis_] - 1, cuts_[rank() + 1] * width_ + support_ - 2)};
   }
 
+  /// The node columns [first, second) this rank owns along the axis.
+  std::pair<int, int> owned_columns() const { return exchange_->owned_columns(); }
+
   /// The first node column of every rank along the axis, then the node count (parallel::GridPoisson's
   /// cuts).
   std::vector<int> column_cuts() const {
@@ -236,8 +239,8 @@ class Domain {
 
   /// StripeExchange::fill_ghosts of a node array (nothing at one rank). Collective.
   template <class NodeArrayT>
-  void fill_ghosts(NodeArrayT& nodes, int width) const {
-    if (active()) exchange_->fill_ghosts(nodes.data(), sizeof(nodes[0]), width);
+  void fill_ghosts(NodeArrayT&& nodes, int width) const {
+    if (active()) exchange_->fill_ghosts(nodes.data(), node_bytes(nodes), width);
   }
 
   /// Re-cuts for an equal particle count per rank when the counts differ by more than

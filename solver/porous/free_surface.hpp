@@ -47,6 +47,8 @@ class SupportCut {
 
   explicit SupportCut(std::size_t nodes) : extent_(nodes) {}
   void clear(std::size_t i) { extent_[i] = Extent{}; }
+  /// The per-node extents as a node array (what a scatter names and a ghost fill copies).
+  std::vector<Extent>& extents() { return extent_; }
   /// A water point's domain [x_lo, x_hi] = [x - l, x + l] joins the extent (through the scatter
   /// schedule): kBaseExtent at its support's first node, here; otherwise at each node with S > 0,
   /// in the P2G's node loop (add_at_node).

@@ -117,31 +117,38 @@ class CellMoments {
 
   /// Turns the moments of every cell with points into its node pairs, calls
   /// out(first node's flat index, const CellOperators&) once per such cell, and zeroes the moments
-  /// for the next step. `box` is the step's node box (every point's support lies in it).
-  template <class Out>
-  void reduce(const NodeBox<2>& box, Out&& out) {
-    if (box.empty()) return;
-    const int b0_lo = box.lo[0], b0_hi = box.hi[0] - (S - 1);
-    const int b1_lo = box.lo[1], b1_hi = box.hi[1] - (S - 1);
-    if (b0_hi < b0_lo || b1_hi < b1_lo) return;
-    const int stripes = (b0_hi - b0_lo) / S + 1;
+  /// for the next step. `box` is the step's node box (every point's support lies in it). The cells
+  /// go in the scatter schedule's stripes along `axis` (S node columns from the grid's first, the
+  /// cells of one colour in parallel), so a node gets its cells' pairs in an order that depends on
+  /// the grid only; after_colour(colour) then lets the ranks exchange the rows of their shared
+  /// columns (StripeSchedule::run's protocol; nothing at one rank).
+  template <class AfterColour, class Out>
+  void reduce(const NodeBox<2>& box, int axis, AfterColour&& after_colour, Out&& out) {
+    const int other = 1 - axis;
+    const int a_lo = box.lo[axis], a_hi = box.hi[axis] - (S - 1);  // cells' first nodes along the axis
+    const int o_lo = box.lo[other], o_hi = box.hi[other] - (S - 1);
+    const bool any = !box.empty() && a_hi >= a_lo && o_hi >= o_lo;
+    const int s_lo = any ? a_lo / S : 0, s_hi = any ? a_hi / S : -1;
     for (int colour = 0; colour < 2; ++colour) {
-#pragma omp parallel for schedule(dynamic, 1) if (stripes > 2)
-      for (int s = colour; s < stripes; s += 2) {
+      const int first = s_lo + ((s_lo % 2 == colour) ? 0 : 1);
+#pragma omp parallel for schedule(dynamic, 1) if (s_hi - s_lo > 1)
+      for (int s = first; s <= s_hi; s += 2) {
         CellOperators op;
-        for (int b1 = b1_lo; b1 <= b1_hi; ++b1)
-          for (int b0 = b0_lo + s * S; b0 <= std::min(b0_hi, b0_lo + s * S + S - 1); ++b0) {
-            const std::array<int, 2> base{b0, b1};
+        for (int bo = o_lo; bo <= o_hi; ++bo)
+          for (int ba = std::max(a_lo, s * S); ba <= std::min(a_hi, s * S + S - 1); ++ba) {
+            std::array<int, 2> base;
+            base[axis] = ba, base[other] = bo;
             double* M = moments_.data() + cell_index(base) * 3 * QQ;
             const bool empty = M[kSoilSet * QQ] == 0.0 && M[kWaterSet * QQ] == 0.0 && M[kLaplaceSet * QQ] == 0.0;
             if (!empty && laplace_from_sets_)
               for (int i = 0; i < QQ; ++i)
                 M[kLaplaceSet * QQ + i] = inv_rho_s_ * M[kSoilSet * QQ + i] + inv_rho_w_ * M[kWaterSet * QQ + i];
-            if (!empty) cell_operators(tables_[0][b0], tables_[1][b1], M, op);
+            if (!empty) cell_operators(tables_[0][base[0]], tables_[1][base[1]], M, op);
             std::fill_n(M, 3 * QQ, 0.0);  // every cell of the range: nothing carries into the next step
             if (!empty) out(cell_index(base), op);
           }
       }
+      after_colour(colour);
     }
   }
 

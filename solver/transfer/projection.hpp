@@ -147,6 +147,12 @@ class NodeProjection {
     return q;
   }
 
+  /// fn(array) for each of the fit's node arrays (the ranks' ghost fill of fitted nodes).
+  template <class Fn>
+  void for_each_node_array(Fn&& fn) {
+    fn(blocks_);
+    fn(well_posed_);
+  }
   /// Whether node i received any weight in the last fit.
   bool has(std::size_t i) const { return blocks_[i][0] > 0.0; }
   /// The fitted value at node i (a_I[0]: the basis is centred at the node).

@@ -38,6 +38,24 @@ class NodeExchange {
   virtual void after_colour(int colour, void* nodes, std::size_t bytes, Reach reach) const = 0;
 };
 
+/// A node array stored as `per_node` consecutive values per node (a stencil row of an operator),
+/// as a scatter names it to the exchange and a ghost fill copies it.
+template <class T>
+struct NodeRows {
+  T* first;
+  std::size_t per_node;
+  T* data() const { return first; }
+};
+/// The bytes of one node's entry in a node array (NodeArray, std::vector) or in NodeRows.
+template <class Array>
+std::size_t node_bytes(const Array& a) {
+  return sizeof(a[0]);
+}
+template <class T>
+std::size_t node_bytes(const NodeRows<T>& a) {
+  return a.per_node * sizeof(T);
+}
+
 class StripeSchedule {
  public:
   /// base_of(p) returns particle p's first node index along the stripe axis. A stable counting
@@ -103,14 +121,14 @@ class StripeSchedule {
   /// the node arrays fn adds to, which a rank shares with its neighbours after each colour
   /// (NodeExchange; nothing at one rank).
   template <class Fn, class... NodeArrays>
-  void run(Fn&& fn, NodeArrays&... scattered) const {
+  void run(Fn&& fn, NodeArrays&&... scattered) const {
     run_reaching(Reach::support, fn, scattered...);
   }
   /// run() for a scatter into the cells that hold the particles after the step's move (arrays
   /// indexed as cells by their lowest node): a particle moves less than a cell per step, so a
   /// cell still gets the points of at most two neighbouring stripes, of two colours.
   template <class Fn, class... CellArrays>
-  void run_after_move(Fn&& fn, CellArrays&... scattered) const {
+  void run_after_move(Fn&& fn, CellArrays&&... scattered) const {
     run_reaching(Reach::moved_cell, fn, scattered...);
   }
   /// The ranks' exchange of scattered node columns (nullptr: one rank).
@@ -119,14 +137,14 @@ class StripeSchedule {
 
  private:
   template <class Fn, class... NodeArrays>
-  void run_reaching([[maybe_unused]] Reach reach, Fn& fn, NodeArrays&... scattered) const {
+  void run_reaching([[maybe_unused]] Reach reach, Fn& fn, NodeArrays&&... scattered) const {
     if constexpr (sizeof...(NodeArrays) == 0)
       if (exchange_) throw std::logic_error("a scatter that does not name its node arrays ran on several ranks");
     for (int colour = 0; colour < 2; ++colour) {
 #pragma omp parallel for schedule(dynamic, 1) if (static_cast<long>(order_.size()) > parallel_threshold)
       for (int s = colour; s < stripes_; s += 2)
         for (int k = start_[s]; k < start_[s + 1]; ++k) fn(order_[k]);
-      if (exchange_) (exchange_->after_colour(colour, scattered.data(), sizeof(scattered[0]), reach), ...);
+      if (exchange_) (exchange_->after_colour(colour, scattered.data(), node_bytes(scattered), reach), ...);
     }
   }
 

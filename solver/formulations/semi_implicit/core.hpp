@@ -22,6 +22,7 @@
 #include "solver/formulations/semi_implicit/pressure.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/parallel/particles.hpp"
 #include "solver/porous/drag.hpp"
 #include "solver/porous/permeability.hpp"
 #include "solver/porous/points.hpp"
@@ -70,7 +71,7 @@ class Core : public Formulation<Dim> {
         materials_(make_materials<Dim>(s)),
         phase_materials_(s),
         material_particles_(group_by_material(state.solid, s.materials.size())),
-        pressure_(grid_, box_, remap_of(s, name), drained_faces(), face_pressures(s)),
+        pressure_(grid_, box_, reach_, remap_of(s, name), drained_faces(), face_pressures(s)),
         fbar_(s, grid_) {
     conservative_ = s.solver.continuity != "non-conservative";  // "" (unset): this formulation's default
     implicit_drag_ = s.solver.drag_integration != "semi-implicit";  // "" (unset): the default, implicit
@@ -120,15 +121,27 @@ class Core : public Formulation<Dim> {
 
   // ---- the stages of a step ------------------------------------------------------------------
 
-  /// (1) Shape data of the soil points and the active node box; failures reported.
+  /// (1) Shape data of the soil points and the active node box; failures reported. Under mpirun
+  /// the soil points that crossed a cut move to their rank first (parallel::own_particles).
   void evaluate_soil_shapes(State<Dim>& st) {
     long bad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, st.solid, sd_, bad);
+    if (parallel::own_particles<Shape>(domain_, grid_, st, schedule_, sd_, box_, bad))
+      regroup_by_material(st.solid, material_particles_);
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
   }
-  /// (1) The soil's scatter schedule, the tractions' face points, and the box's nodes cleared.
+  /// (1) The soil's scatter schedule, the tractions' face points (mpirun: every rank's), the
+  /// nodes the step may read (reach_), and the box's nodes cleared.
   void prepare_nodes(State<Dim>& st, const StepContext& ctx) {
     collect_face_forces<Shape>(grid_, loads_, st.solid, st.index_of_id, ctx.t, box_, face_forces_);
+    parallel::share_face_forces<Shape>(domain_, grid_, face_forces_, box_);
+    reach_ = box_;
+    if (domain_.active()) {  // the rank's own node columns and kGhost either side
+      const int a = domain_.axis();
+      const auto [lo, hi] = domain_.owned_columns();
+      reach_.lo[a] = std::max(0, lo - Pressure::kGhost);
+      reach_.hi[a] = std::min(grid_.nodes_per_axis()[a] - 1, hi + Pressure::kGhost - 1);
+    }
     transfer::build_schedule(grid_, sd_, schedule_);
     auto& surface = pressure_.surface();
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
@@ -150,7 +163,7 @@ class Core : public Formulation<Dim> {
   void scatter_soil(const ParticleSet<Dim>& ps, SoilWeights&& weights) {
     const bool laplace_derived = pressure_.laplace_derived();
     auto& surface = pressure_.surface();
-    schedule_.run([&](int p) __attribute__((always_inline)) {
+    auto scatter = [&](int p) __attribute__((always_inline)) {
       const double V = ps.V[p], n = ps.n[p], m = ps.m[p];
       const double k = pore_[ps.material[p]].perm.at_point(n, V, ps.V0[p]);
       const Mat3 sig = to_matrix(ps.sigma[p]);
@@ -181,7 +194,14 @@ class Core : public Formulation<Dim> {
           if (wet) surface.add_at_node(i, N, x_lo, x_hi);
         }
       });
-    });
+    };
+    // Under mpirun the scattered node arrays are exchanged at the cuts (StripeSchedule::run); the
+    // cell moments go to the points' own cells, which the rank owns.
+    if constexpr (kPoreWater) schedule_.run(scatter, soil_.acc, node_, water_.acc, surface.extents());
+    else schedule_.run(scatter, soil_.acc, node_);
+    // The free surface's test at a node reads the extents of the supports starting up to S - 1
+    // columns below it (kBaseExtent): the ghost columns' too.
+    if constexpr (kPoreWater && porous::SupportCut<Dim, Shape>::kBaseExtent) pressure_.fill_ghosts(surface.extents());
   }
 
   /// (2) Nodal porosity and conductivity of the soil, n_I = sum S m n / M_s and k_I = sum S m k /
@@ -194,10 +214,12 @@ class Core : public Formulation<Dim> {
       e.n = porous::porosity_at_node(e.mn, Ms, 1.0);
       e.k = Ms > transfer::empty_node_mass ? e.mk / Ms : 0.0;
     });
+    pressure_.fill_ghosts(node_);  // mpirun: the continuity's n_K, R columns beyond the rank's
   }
   /// (3) Tractions on the soil (no pore-pressure loads: see loads_).
   void add_face_forces() {
-    swmpm::add_face_forces(grid_, face_forces_, soil_);
+    parallel::weigh_face_forces(domain_, grid_, face_forces_, carries_mass(soil_));  // one rank: weigh_face_forces
+    add_weighed_face_forces(grid_, face_forces_, soil_);
   }
   /// (3) The water's nodal velocity v_w^t = M_w v_w / M_w from the scattered sums (0 where none).
   void nodal_water_velocity() {
@@ -274,6 +296,8 @@ class Core : public Formulation<Dim> {
 
   /// (5c) The pressure increment; false (reported) if the system is not positive definite.
   bool solve_pressure(State<Dim>& st, double dt) {
+    pressure_.fill_ghosts(soil_.v);  // mpirun: the divergence reads R columns beyond the rank's
+    pressure_.fill_ghosts(water_.v);
     auto n_of = [&](std::size_t K) { return node_[K].n; };
     const bool ok = conservative_ ? pressure_.template solve<true>(dt, soil_, water_, n_of)
                                   : pressure_.template solve<false>(dt, soil_, water_, n_of);
@@ -362,6 +386,8 @@ class Core : public Formulation<Dim> {
 #pragma omp parallel for reduction(max : v_max) if (n > parallel_threshold)
       for (long p = 0; p < n; ++p) v_max = std::max(v_max, set->v[p].norm());
     }
+    c_max = parallel::max(c_max);  // over all ranks (mpirun)
+    v_max = parallel::max(v_max);
     std::ostringstream os;
     os << "soil P-wave CFL (c = " << c_max << " m/s with the saturated density, |v|max = " << v_max
        << " m/s); the pore pressure is implicit and the drag " << (implicit_drag_ ? "implicit" : "semi-implicit")
@@ -378,7 +404,14 @@ class Core : public Formulation<Dim> {
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
   std::vector<typename Formulation<Dim>::Counter> counters() const override {
-    return pressure_.template counters<typename Formulation<Dim>::Counter>();
+    auto c = pressure_.template counters<typename Formulation<Dim>::Counter>();
+    domain_.add_counters(c);
+    return c;
+  }
+  std::string on_several_ranks(const scene::Scene& s) const override { return parallel::refused_on_several_ranks(s); }
+  void distribute(State<Dim>& st) override {
+    parallel::distribute<Shape>(domain_, grid_, st, schedule_, material_particles_);
+    pressure_.distribute(domain_);
   }
 
  protected:
@@ -410,6 +443,11 @@ class Core : public Formulation<Dim> {
       const double outward = f % 2 == 0 ? -1.0 : 1.0;
       NodeBox<Dim> face = box_;
       face.lo[axis] = face.hi[axis] = j;
+      if (domain_.active()) {  // mpirun: each rank its own columns (the run sums the ranks' powers)
+        const auto [lo, hi] = domain_.owned_columns();
+        face.lo[domain_.axis()] = std::max(face.lo[domain_.axis()], lo);
+        face.hi[domain_.axis()] = std::min(face.hi[domain_.axis()], hi - 1);
+      }
       if (face.empty() || box_.lo[axis] > j || box_.hi[axis] < j) continue;
       grid_.for_each_node(face, [&](std::size_t i, const auto&) {  // serial: fixed summation order
         if (!(water_.acc[i].m > transfer::empty_node_mass)) return;
@@ -498,6 +536,8 @@ class Core : public Formulation<Dim> {
   bool fast_drainage_ = false;         // an initialisation with its own permeability is running
   bool pore_water_on_soil_ = false;    // single-point: the soil points carry the water (fluid_material per point)
   NodeBox<Dim> box_;
+  NodeBox<Dim> reach_;  // the nodes the per-node stages may read: box_ (mpirun: and the ghost columns)
+  parallel::Domain<Dim> domain_;  // mpirun: this rank's stripes and soil points (inactive at one rank)
   NodeFields<Dim> soil_, water_;
   std::vector<NodeExtra> node_;
   NodeArray<Vec<Dim>> A_soil_, A_water_;  // per node: M v^t + dt f of each phase (implicit drag)

@@ -51,6 +51,10 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
     this->derive_laplace_if_single_densities(state.solid, ws, [&](int p) { return rho_w_points_[ws.material[p]]; });
   }
   std::string name() const override { return "semi-implicit-double-point"; }
+  /// The water points' set (its own schedule, migration and exchanges) is not distributed yet.
+  std::string on_several_ranks(const scene::Scene&) const override {
+    return "formulation semi-implicit-double-point does not run on several ranks yet";
+  }
 
   void step(State<Dim>& st, const StepContext& ctx) override {
     // The nodal data of the last step are overwritten below: output fields not filled by now stay
@@ -276,7 +280,7 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
     pressure_.fit(wschedule_, sdw_, ws, [&](int p) { return ws.V[p]; });
     pressure_.set_node_roles(water_);
     if constexpr (kCellMoments) {
-      pressure_.assemble_from_moments();
+      pressure_.assemble_from_moments(schedule_);
     } else {
       schedule_.run([&](int p) { pressure_.template add_operators<true, false>(sd_[p], soil_point_weights(ps, p)); });
       wschedule_.run([&](int p) { pressure_.template add_operators<false, true>(sdw_[p], water_point_weights(ws, p)); });

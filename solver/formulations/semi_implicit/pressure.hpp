@@ -25,6 +25,8 @@
 #include "solver/formulations/semi_implicit/pressure_poisson.hpp"
 #include "solver/grid/grid.hpp"
 #include "solver/output/checkpoint.hpp"
+#include "solver/parallel/domain.hpp"
+#include "solver/parallel/poisson.hpp"
 #include "solver/porous/free_surface.hpp"
 #include "solver/shape/shape.hpp"
 #include "solver/transfer/cell_moments.hpp"
@@ -59,10 +61,17 @@ class PressureStep {
   static constexpr bool kCellMoments = Dim == 2 && (Shape::bspline || std::is_same_v<Shape, shape::Linear>);
   using Moments = transfer::CellMoments<std::conditional_t<kCellMoments, Shape, shape::Linear>>;
 
+  /// Under mpirun the per-node stages read their neighbours up to kGhost node columns beyond the
+  /// rank's own (G p at the top shared column reaches R = S - 1 further; the fit's inward search
+  /// as far): the ghost columns, which Domain::fill_ghosts fills from their owners.
+  static constexpr int kGhost = 2 * (S - 1);
+
   /// face_drained[f]: the water drains through grid face f (p prescribed: face_pressure[f], Pa).
-  PressureStep(const Grid<Dim>& g, const NodeBox<Dim>& box, Remap remap, const std::array<bool, 6>& face_drained,
-               const std::array<double, 6>& face_pressure)
-      : grid_(g), box_(box), remap_(remap), face_drained_(face_drained), face_pressure_(face_pressure),
+  /// box: the step's nodes (the formulation's; under mpirun the rank's own and shared columns);
+  /// reach: the nodes whose values may be read (box at one rank; with the ghost columns under mpirun).
+  PressureStep(const Grid<Dim>& g, const NodeBox<Dim>& box, const NodeBox<Dim>& reach, Remap remap,
+               const std::array<bool, 6>& face_drained, const std::array<double, 6>& face_pressure)
+      : grid_(g), box_(box), reach_(reach), remap_(remap), face_drained_(face_drained), face_pressure_(face_pressure),
         poisson_(g), surface_(g.num_nodes()) {
     const std::size_t nodes = g.num_nodes();
     p_node_.resize(nodes);  // zero (NodeArray: memory only where the steps' boxes reach)
@@ -70,6 +79,17 @@ class PressureStep {
     D_water_.resize(nodes * KD);
     if constexpr (kCellMoments) moments_ = std::make_unique<Moments>(g);
     d_steps_ = DSt::steps(g.nodes_per_axis());
+  }
+
+  /// Under mpirun: the decomposition whose ghost columns the stages fill, and the distributed
+  /// solve of (5c) in place of CHOLMOD (parallel::GridPoisson). Nothing at one rank.
+  void distribute(const parallel::Domain<Dim>& d) {
+    if (d.active()) domain_ = &d;
+  }
+  /// The ghost columns of a node array, filled from their owners (nothing at one rank). Collective.
+  template <class Array>
+  void fill_ghosts(Array&& a) const {
+    if (domain_) domain_->fill_ghosts(a, kGhost);
   }
 
   /// The water's extent per node, for the free surface (the P2G passes add to it).
@@ -94,12 +114,14 @@ class PressureStep {
   template <class SD, class Weight>
   void fit(const StripeSchedule& schedule, const std::vector<SD>& sd, const ParticleSet<Dim>& ws, Weight&& weight) {
     linear_.fit(grid_, box_, schedule, sd, ws.x, weight, [&](int p) { return ws.p[p]; });
+    linear_.for_each_node_array([&](auto& a) { fill_ghosts(a); });  // mpirun: the inward search reads them
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto& ijk) {
       if (!linear_.has(i) || linear_.well_posed(i)) return;
       const std::size_t src = inward_well_posed(i, ijk);
       if (src != i) linear_.impose_gradient(grid_, i, linear_.gradient_at_node(grid_, src));
     });
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { p_node_[i] = linear_.at_node(i); });
+    fill_ghosts(p_node_);  // mpirun: the predictor's G p^t reads R columns beyond the rank's
   }
 
   /// (5b) The role of every node with water: prescribed on the grid faces the water drains
@@ -139,11 +161,19 @@ class PressureStep {
   /// are one polynomial per cell; transfer/cell_moments.hpp). B4 6^2: the point-wise scatter took
   /// 1443 instructions per point-step (single-point), 950 per pass (double-point). The points'
   /// moments were added by the P2G passes, soil points first, in schedule order.
-  void assemble_from_moments() {
+  void assemble_from_moments(const StripeSchedule& schedule) {
     if constexpr (kCellMoments) {
       Moments& cm = *moments_;
       const std::size_t nx = static_cast<std::size_t>(grid_.nodes_per_axis()[0]);
-      cm.reduce(box_, [&](std::size_t first, const typename Moments::CellOperators& op) {
+      // mpirun: the rows of the shared columns go to the other rank after each colour, as a scatter's.
+      auto after_colour = [&](int colour) {
+        if (const NodeExchange* x = schedule.exchange()) {
+          x->after_colour(colour, poisson_.row(0), node_bytes(laplace_rows()), Reach::support);
+          x->after_colour(colour, D_solid_.data(), node_bytes(soil_rows()), Reach::support);
+          x->after_colour(colour, D_water_.data(), node_bytes(water_rows()), Reach::support);
+        }
+      };
+      cm.reduce(box_, transfer::stripe_axis(grid_), after_colour, [&](std::size_t first, const typename Moments::CellOperators& op) {
         for (int r = 0; r < NP; ++r) {
           const std::size_t node = first + static_cast<std::size_t>(r / S) * nx + r % S;
           double* lrow = poisson_.row(node) + kRowSlot[r];
@@ -159,6 +189,12 @@ class PressureStep {
     }
   }
 
+  /// (5a) point by point: fn(p) adds point p's share (add_operators) through the schedule, which
+  /// names the operator rows to the ranks' exchange.
+  template <class Fn>
+  void run_operators(const StripeSchedule& schedule, Fn&& fn) {
+    schedule.run(fn, laplace_rows(), soil_rows(), water_rows());
+  }
   /// (5a) One point's share of the operators, through the stripe schedule:
   ///   D^s_IK += cs S_I grad S_K,  D^w_IK += cw S_I grad S_K   (eqs. 62-63; cs = (1 - n) V, cw = n V)
   ///   L_IJ += cl grad S_I . grad S_J                            (eq. 61, cl = c V inside the quadrature)
@@ -234,6 +270,7 @@ class PressureStep {
       }
       poisson_.rhs(i) = -inv_dt * div;
     });
+    if (domain_) return solve_on_ranks();
     return poisson_.solve(grid_, box_);
   }
 
@@ -287,14 +324,27 @@ class PressureStep {
     });
   }
 
-  /// Restart: the equations and reused factor of the solver.
-  void save(Checkpoint& c) const { poisson_.save(c, "formulation/poisson"); }
-  void restore(const Checkpoint& c) { poisson_.restore(c, "formulation/poisson"); }
+  /// The solver's relative residual |b - L dp| / |b| (CHOLMOD's preconditioned CG; PETSc's KSP).
+  static constexpr double kTolerance = Poisson::kTolerance;
+
+  /// Restart: the equations and reused factor of one rank's solver. Under mpirun there are none
+  /// (each solve is PETSc's, from scratch): a checkpoint written there holds none, and a resume
+  /// on one rank starts CHOLMOD afresh (its answers then agree with the uninterrupted run to the
+  /// solver's tolerance); a resume under mpirun ignores a one-rank run's.
+  void save(Checkpoint& c) const {
+    if (parallel::ranks() == 1) poisson_.save(c, "formulation/poisson");
+  }
+  void restore(const Checkpoint& c) {
+    if (parallel::ranks() == 1 && c.header.contains("formulation/poisson")) poisson_.restore(c, "formulation/poisson");
+  }
   /// The solver's work (pressure_poisson.hpp): how often the unknown node set changed (new
   /// pattern and symbolic analysis), numeric factorisations, and CG iterations preconditioned by
   /// an older factor on the other steps.
   template <class Counter>
   std::vector<Counter> counters() const {
+    if (domain_)
+      return {{"pressure_solves", static_cast<double>(ksp_solves_), "distributed pressure solves (PETSc CG + BoomerAMG)"},
+              {"pressure_ksp_iterations", static_cast<double>(ksp_iterations_), "CG iterations of the distributed solves"}};
     return {{"pressure_pattern_builds", static_cast<double>(poisson_.pattern_builds()),
              "new sparsity patterns of L (the set of unknown nodes changed)"},
             {"pressure_factorisations", static_cast<double>(poisson_.factorisations()), "CHOLMOD numeric factorisations"},
@@ -330,7 +380,7 @@ class PressureStep {
     double x_s = 0.0;
     int axis = -1;
     bool hi_cut = false;
-    const double cut = surface_.cut(grid_, box_, i, ijk, axis, hi_cut, x_s);
+    const double cut = surface_.cut(grid_, reach_, i, ijk, axis, hi_cut, x_s);
     if (!surface_.on_surface(cut, grid_)) return false;
     p_D = -linear_.gradient_at_node(grid_, i)[axis] * (x_s - grid_.axis(axis).node_x[ijk[axis]]);
     return true;
@@ -343,7 +393,7 @@ class PressureStep {
     int axis = -1;
     bool hi_cut = false;
     double x_s = 0.0;
-    surface_.cut(grid_, box_, i, ijk, axis, hi_cut, x_s);
+    surface_.cut(grid_, reach_, i, ijk, axis, hi_cut, x_s);
     if (axis < 0) return i;
     const auto& nn = grid_.nodes_per_axis();
     std::size_t stride = 1;
@@ -357,11 +407,30 @@ class PressureStep {
     }
     return i;
   }
-  /// Whether node ijk + d lies in this step's active box (rows outside it hold stale values).
+  /// Whether node ijk + d lies in the nodes this step may read (the box, and under mpirun its ghost
+  /// columns; rows outside hold stale values).
   bool inside(const std::array<int, Dim>& ijk, const std::array<int, Dim>& d) const {
     for (int a = 0; a < Dim; ++a)
-      if (ijk[a] + d[a] < box_.lo[a] || ijk[a] + d[a] > box_.hi[a]) return false;
+      if (ijk[a] + d[a] < reach_.lo[a] || ijk[a] + d[a] > reach_.hi[a]) return false;
     return true;
+  }
+  /// The operator rows as node arrays (K values per node), for the ranks' exchange.
+  NodeRows<double> laplace_rows() { return {poisson_.row(0), static_cast<std::size_t>(Poisson::K)}; }
+  NodeRows<Vec<Dim>> soil_rows() { return {D_solid_.data(), static_cast<std::size_t>(KD)}; }
+  NodeRows<Vec<Dim>> water_rows() { return {D_water_.data(), static_cast<std::size_t>(KD)}; }
+  /// (5c) under mpirun: the same system over the ranks (parallel::GridPoisson: PETSc CG with
+  /// BoomerAMG to kTolerance), then the increments of the ghost columns. Built again when the cuts
+  /// move (a rebalance). False when CG did not converge (an undetermined pressure).
+  bool solve_on_ranks() {
+    if (!ranks_poisson_ || ranks_cuts_ != domain_->column_cuts()) {
+      ranks_cuts_ = domain_->column_cuts();
+      ranks_poisson_ = std::make_unique<parallel::GridPoisson<Dim, S - 1>>(grid_, domain_->axis(), ranks_cuts_);
+    }
+    const auto stats = poisson_.solve_on_ranks(*ranks_poisson_, kTolerance);
+    ++ksp_solves_;
+    ksp_iterations_ += stats.iterations;
+    fill_ghosts(poisson_.dp_nodes());  // the corrections' G dp reads R columns beyond the rank's
+    return stats.converged;
   }
   /// Calls body(visit, remapped) with the remap's visitor: visit(sd, x, fn) calls fn(i, N, pbar_I)
   /// at each node of a point (for_each_node's order), pbar_I the nodal term of the remapped p^t at
@@ -389,7 +458,8 @@ class PressureStep {
   }
 
   const Grid<Dim>& grid_;
-  const NodeBox<Dim>& box_;  // the step's active nodes (the formulation's)
+  const NodeBox<Dim>& box_;    // the step's active nodes (the formulation's)
+  const NodeBox<Dim>& reach_;  // the nodes whose values the step may read (the box; mpirun: and the ghosts)
   Remap remap_;
   std::array<bool, 6> face_drained_;
   std::array<double, 6> face_pressure_;  // Pa, prescribed p on drained faces (0 unless `pressure`)
@@ -401,6 +471,10 @@ class PressureStep {
   std::array<long, KD> d_steps_{};
   NodeProjection<Dim, S, 1> linear_;
   NodeProjection<Dim, S, 0> constant_;
+  const parallel::Domain<Dim>* domain_ = nullptr;  // mpirun only
+  std::unique_ptr<parallel::GridPoisson<Dim, S - 1>> ranks_poisson_;
+  std::vector<int> ranks_cuts_;  // the column cuts ranks_poisson_ was built for
+  long ksp_solves_ = 0, ksp_iterations_ = 0;
 };
 
 }  // namespace swmpm::semi_implicit

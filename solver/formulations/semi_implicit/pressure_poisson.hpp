@@ -243,6 +243,15 @@ class PressurePoisson {
     std::copy(values.begin(), values.end(), A_.valuePtr());
   }
 
+  /// Under mpirun: the same rows, right-hand sides, roles and prescribed increments solved over the
+  /// ranks by `solver` (parallel::GridPoisson); the increments land in dp(). Collective.
+  template <class RanksSolver>
+  auto solve_on_ranks(RanksSolver& solver, double rtol) {
+    return solver.solve(stencil_.data(), rhs_.data(), role_.data(), dp_.data(), 0, rtol);
+  }
+  NodeArray<double>& dp_nodes() { return dp_; }
+  static constexpr double kTolerance = 1e-10;  // relative residual |b - L x| / |b|
+
   /// The increment at node i (after solve).
   double dp(std::size_t i) const { return dp_[i]; }
   const NodeArray<double>& dp() const { return dp_; }
@@ -255,7 +264,6 @@ class PressurePoisson {
   static constexpr int kMaxIterations = 10;
   static constexpr long kStickySteps = 100;   // solves a formerly unknown node keeps its equation
   static constexpr int kMaxAge = 50;          // steps
-  static constexpr double kTolerance = 1e-10;  // relative residual |b - L x| / |b|
 
   /// x_ = L^-1 b_ by conjugate gradients preconditioned with the stored (older) factor, from
   /// x = 0. Returns false (x_ undefined) when it needs more than kMaxIterations.

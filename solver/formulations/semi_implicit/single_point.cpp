@@ -43,7 +43,8 @@ class SemiImplicitSinglePoint final : public semi_implicit::Core<Dim, Shape> {
     const double dt = ctx.dt;
     StageClock lap(this->times_);
 
-    if (reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval)) lap("reorder");  // (0)
+    if (reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval, &this->domain_))
+      lap("reorder");  // (0)
 
     this->evaluate_soil_shapes(st);                                                         // (1)
     this->prepare_nodes(st, ctx);
@@ -107,9 +108,9 @@ class SemiImplicitSinglePoint final : public semi_implicit::Core<Dim, Shape> {
     pressure_.fit(schedule_, sd_, ps, [&](int p) { return this->dry(ps, p) ? 0.0 : ps.V[p]; });  // the water's points
     pressure_.set_node_roles(water_);
     if constexpr (kCellMoments) {
-      pressure_.assemble_from_moments();
+      pressure_.assemble_from_moments(schedule_);
     } else {
-      schedule_.run([&](int p) { pressure_.template add_operators<true, true>(sd_[p], weights(ps, p)); });
+      pressure_.run_operators(schedule_, [&](int p) { pressure_.template add_operators<true, true>(sd_[p], weights(ps, p)); });
     }
   }
   /// A point carries both phases: s = (1 - n) V, w = n V, l = V [(1 - n)/rho_s + n/rho_w]
