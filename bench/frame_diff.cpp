@@ -1,6 +1,7 @@
 // frame_diff A.vtu B.vtu: the largest difference between two frames of the same run, per point
 // array, relative to that array's largest magnitude in A (and of the positions, relative to the
-// extent of A's points). Prints one line per array that differs and, last, "max_relative R".
+// extent of A's points). Prints one line per array that differs, with the point (in A) where the
+// difference is largest, and, last, "max_relative R".
 // bench/bitwise.py uses it to say by how much a case whose hashes moved differs. Points are matched
 // by their `id` array where both frames have one (a .pvtu of a run on several ranks holds them in
 // another order than the one-rank .vtu), else by position in the file.
@@ -12,11 +13,13 @@
 #include "scene/pointcloud.hpp"
 
 namespace {
-double relative(const std::vector<double>& a, const std::vector<double>& b) {
+/// The largest |a - b| relative to max |a|; `at`: the value index where it is.
+double relative(const std::vector<double>& a, const std::vector<double>& b, std::size_t& at) {
   double scale = 0.0, diff = 0.0;
+  at = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
     scale = std::max(scale, std::abs(a[i]));
-    diff = std::max(diff, std::abs(a[i] - b[i]));
+    if (std::abs(a[i] - b[i]) > diff) diff = std::abs(a[i] - b[i]), at = i;
   }
   return scale > 0.0 ? diff / scale : diff;
 }
@@ -57,16 +60,21 @@ int main(int argc, char** argv) {
         pa.push_back(a.points[p][d]);
         pb.push_back(b.points[p][d]);
       }
-    double worst = relative(pa, pb);
-    if (worst > 0) std::printf("points %.3e\n", worst);
+    // Each line: the array, its largest relative difference and the point where it is (x y z in A).
+    auto where = [&](std::size_t p) {
+      std::printf(" at %.6g %.6g %.6g\n", a.points[p][0], a.points[p][1], a.points[p][2]);
+    };
+    std::size_t at = 0;
+    double worst = relative(pa, pb, at);
+    if (worst > 0) std::printf("points %.3e", worst), where(at / 3);
     for (const auto& arr : a.arrays) {
       const auto* other = b.find(arr.name);
       if (!other || other->values.size() != arr.values.size()) {
         std::printf("%s missing or resized\nmax_relative inf\n", arr.name.c_str());
         return 1;
       }
-      const double r = relative(arr.values, other->values);
-      if (r > 0) std::printf("%s %.3e\n", arr.name.c_str(), r);
+      const double r = relative(arr.values, other->values, at);
+      if (r > 0) std::printf("%s %.3e", arr.name.c_str(), r), where(at / static_cast<std::size_t>(arr.components));
       worst = std::max(worst, r);
     }
     std::printf("max_relative %.3e\n", worst);

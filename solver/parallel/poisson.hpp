@@ -48,6 +48,9 @@ class KspSolve {
   Stats solve(long n, long N, const std::vector<long>& rows, const std::vector<long>& cols,
               const std::vector<double>& values, const std::vector<long>& b_rows, const std::vector<double>& b_values,
               const std::vector<long>& wanted, std::vector<double>& x_wanted, double rtol);
+  /// hypre setups so far (a setup is reused by later solves; see poisson.cpp).
+  long setups() const;
+  static constexpr int kMaxAge = 50;  // solves between setups at most
 
  private:
   struct Impl;
@@ -100,6 +103,17 @@ class GridPoisson {
     const int top = std::min(nodes_[axis_], c_hi + R);  // the columns whose rows this rank holds: [c_lo, top)
     const auto steps = St::steps(nodes_);
     rows_.clear(), cols_.clear(), values_.clear(), b_rows_.clear(), b_values_.clear();
+    // The pattern: every pair of nodes that had water within the last kStickySolves solves (an
+    // explicit zero unless both are unknown now). It changes only when water reaches a node that
+    // had none for that long (or a node stays dry that long), not as nodes pass between unknown,
+    // prescribed and dry at a moving surface or a coupling vanishes: the matrix and hypre's setup
+    // are reused (KspSolve).
+    ++solves_;
+    if (wet_.size() != grid_.num_nodes()) wet_ = NodeArray<long>(grid_.num_nodes());  // 0: never wet
+    for_each_node(c_lo, top, [&](std::size_t i, const std::array<int, Dim>&) {
+      if (role[i] != inactive) wet_[i] = solves_;
+    });
+    auto in_pattern = [&](std::size_t i) { return wet_[i] > 0 && solves_ - wet_[i] < kStickySolves; };
     for_each_node(c_lo, top, [&](std::size_t i, const std::array<int, Dim>& ijk) {
       const bool own = ijk[axis_] < c_hi;
       const Role ri = static_cast<Role>(role[i]);
@@ -109,9 +123,8 @@ class GridPoisson {
         values_.push_back(ri == unknown ? stencil[i * K + K / 2] : 1.0);
         if (ri == unknown) b_rows_.push_back(row_i), b_values_.push_back(rhs[i]);
       }
+      if (!in_pattern(i)) return;  // an identity row and no couplings
       for (int k = K / 2 + 1; k < K; ++k) {
-        const double L = stencil[i * K + static_cast<std::size_t>(k)];
-        if (L == 0.0) continue;
         const auto d = St::offset(k);
         std::array<int, Dim> jk = ijk;
         bool inside = true;
@@ -124,11 +137,14 @@ class GridPoisson {
         if (owner_[static_cast<std::size_t>(std::min(ijk[axis_], jk[axis_]))] != me) continue;
         const std::size_t j = static_cast<std::size_t>(static_cast<long>(i) + steps[static_cast<std::size_t>(k)]);
         const Role rj = static_cast<Role>(role[j]);
+        if (!in_pattern(j)) continue;
+        const double L = stencil[i * K + static_cast<std::size_t>(k)];
         const long row_j = row(jk);
-        if (ri == unknown && rj == unknown) {
-          rows_.push_back(row_i), cols_.push_back(row_j), values_.push_back(L);
-          rows_.push_back(row_j), cols_.push_back(row_i), values_.push_back(L);
-        } else if (ri == unknown && rj == prescribed) {
+        const double value = ri == unknown && rj == unknown ? L : 0.0;
+        rows_.push_back(row_i), cols_.push_back(row_j), values_.push_back(value);
+        rows_.push_back(row_j), cols_.push_back(row_i), values_.push_back(value);
+        if (L == 0.0) continue;
+        if (ri == unknown && rj == prescribed) {
           b_rows_.push_back(row_i), b_values_.push_back(-L * dp[j]);
         } else if (ri == prescribed && rj == unknown) {
           b_rows_.push_back(row_j), b_values_.push_back(-L * dp[i]);
@@ -151,6 +167,8 @@ class GridPoisson {
     });
     return stats;
   }
+  /// hypre setups so far (KspSolve::setups).
+  long setups() const { return ksp_.setups(); }
 
  private:
   /// fn(flat index, ijk) over the nodes of columns [lo, hi) along the axis, all across.
@@ -168,6 +186,9 @@ class GridPoisson {
   std::vector<int> cuts_;
   std::vector<long> offset_;  // per rank (and the total): its first row
   std::vector<int> owner_;    // per node column along the axis: its rank
+  static constexpr long kStickySolves = 100;
+  long solves_ = 0;
+  NodeArray<long> wet_;  // per node of this rank's rows: the last solve at which it had water
   KspSolve ksp_;
   std::vector<long> rows_, cols_, b_rows_, wanted_;
   std::vector<double> values_, b_values_, x_;
