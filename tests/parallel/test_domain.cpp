@@ -345,7 +345,7 @@ PoissonComparison compare_poisson(double h, std::size_t points) {
   // One rank (mpirun -n 1): all columns.
   GridPoisson<Dim, R> poisson(g, axis, d.active() ? d.column_cuts() : std::vector<int>{0, g.nodes_per_axis()[axis]});
   const double t0 = wall_time();
-  out.stats = poisson.solve(rows.stencil.data()->data(), rows.rhs.data(), rows.role.data(), rows.dp.data(), R, 1e-10);
+  out.stats = poisson.solve(box, rows.stencil.data()->data(), rows.rhs.data(), rows.role.data(), rows.dp.data(), R, 1e-10);
   out.seconds = max(wall_time() - t0);
   const double scale = x.cwiseAbs().maxCoeff();
   NodeBox<Dim> wide = box;

@@ -428,7 +428,7 @@ class PressureStep {
       ranks_cuts_ = domain_->column_cuts();
       ranks_poisson_ = std::make_unique<parallel::GridPoisson<Dim, S - 1>>(grid_, domain_->axis(), ranks_cuts_);
     }
-    const auto stats = poisson_.solve_on_ranks(*ranks_poisson_, kTolerance);
+    const auto stats = poisson_.solve_on_ranks(*ranks_poisson_, box_, kTolerance);
     ++ksp_solves_;
     ksp_iterations_ += stats.iterations;
     fill_ghosts(poisson_.dp_nodes());  // the corrections' G dp reads R columns beyond the rank's

@@ -246,8 +246,8 @@ class PressurePoisson {
   /// Under mpirun: the same rows, right-hand sides, roles and prescribed increments solved over the
   /// ranks by `solver` (parallel::GridPoisson); the increments land in dp(). Collective.
   template <class RanksSolver>
-  auto solve_on_ranks(RanksSolver& solver, double rtol) {
-    return solver.solve(stencil_.data(), rhs_.data(), role_.data(), dp_.data(), 0, rtol);
+  auto solve_on_ranks(RanksSolver& solver, const NodeBox<Dim>& box, double rtol) {
+    return solver.solve(box, stencil_.data(), rhs_.data(), role_.data(), dp_.data(), 0, rtol);
   }
   NodeArray<double>& dp_nodes() { return dp_; }
   static constexpr double kTolerance = 1e-10;  // relative residual |b - L x| / |b|
