@@ -357,18 +357,29 @@ scene::PointCloud last_frame(const std::string& run) {
   return scene::read_vtu(run + "/output/" + frames.back().file);
 }
 
+/// A restart test's two run directories of `scene` (preprocessed), the one-rank run solved to the end.
+struct RestartRuns {
+  fs::path dir;
+  std::string one, run;
+};
+RestartRuns restart_runs(const nlohmann::json& scene, const std::string& name) {
+  RestartRuns r;
+  r.dir = scratch(name);
+  std::ofstream(r.dir / "scene.json") << scene.dump(2);
+  r.one = (r.dir / "one").string(), r.run = (r.dir / "run").string();
+  EXPECT_EQ(swmpm_cmd("preprocess " + (r.dir / "scene.json").string() + " -o " + r.one + " -q", r.dir).status, 0);
+  EXPECT_EQ(swmpm_cmd("preprocess " + (r.dir / "scene.json").string() + " -o " + r.run + " -q", r.dir).status, 0);
+  EXPECT_EQ(swmpm_cmd("solve " + r.one + " -q --threads 1", r.dir).status, 0);
+  return r;
+}
+
 TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
   // A fixed dt puts the last checkpoint (t = 0.275 s, step 1100) just before a step that stores
   // the particles in schedule order (every 10 steps): the restored schedule order is used at once.
   nlohmann::json s = column_collapse(2, "bspline2");
   s["time"]["dt"] = 2.5e-4;
   s["output"]["checkpoint_interval"] = 0.1375;
-  const fs::path dir = scratch("mpirun-restart");
-  std::ofstream(dir / "scene.json") << s.dump(2);
-  const std::string one = (dir / "one").string(), run = (dir / "run").string();
-  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + one + " -q", dir).status, 0);
-  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run + " -q", dir).status, 0);
-  ASSERT_EQ(swmpm_cmd("solve " + one + " -q --threads 1", dir).status, 0);
+  const auto [dir, one, run] = restart_runs(s, "mpirun-restart");
   const auto reference = last_frame(one);
   const std::string monitors = read_text(one + "/monitors.csv");
 
@@ -407,12 +418,7 @@ TEST(Mpirun, SemiImplicitCheckpointOfTwoRanksResumesOnOneAndOnThree) {
   s["time"]["dt"] = 2.5e-4;
   s["time"]["end"] = 0.15;
   s["output"]["checkpoint_interval"] = 0.075;
-  const fs::path dir = scratch("mpirun-sisp-restart");
-  std::ofstream(dir / "scene.json") << s.dump(2);
-  const std::string one = (dir / "one").string(), run = (dir / "run").string();
-  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + one + " -q", dir).status, 0);
-  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run + " -q", dir).status, 0);
-  ASSERT_EQ(swmpm_cmd("solve " + one + " -q --threads 1", dir).status, 0);
+  const auto [dir, one, run] = restart_runs(s, "mpirun-sisp-restart");
   const auto reference = last_frame(one);
   const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
   ASSERT_EQ(two.status, 0) << two.err;
