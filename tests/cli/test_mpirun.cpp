@@ -452,6 +452,17 @@ TEST(Mpirun, AFormulationNotYetOnSeveralRanksIsRefusedBeforeAnythingIsWritten) {
   EXPECT_EQ(r.err.find("does not run"), r.err.rfind("does not run")) << r.err;
   EXPECT_FALSE(fs::exists(run + "/run.json"));
   EXPECT_FALSE(fs::exists(run + "/output"));
+  // A formulation that does not run there yet: semi-implicit-double-point (its water points' set).
+  nlohmann::json dp = load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene-double-point.json");
+  const fs::path dir2 = scratch("mpirun-refused-double-point");
+  std::ofstream(dir2 / "scene.json") << dp.dump(2);
+  const std::string run2 = (dir2 / "run").string();
+  ASSERT_EQ(swmpm_cmd("preprocess " + (dir2 / "scene.json").string() + " -o " + run2 + " -q", dir2).status, 0);
+  const Result r2 = mpirun(2, "solve " + run2 + " -q --threads 1", dir2);
+  EXPECT_EQ(r2.status, 2) << r2.err;
+  EXPECT_NE(r2.err.find("formulation semi-implicit-double-point does not run on several ranks yet"), std::string::npos)
+      << r2.err;
+  EXPECT_FALSE(fs::exists(run2 + "/run.json"));
 }
 
 }  // namespace
