@@ -75,13 +75,13 @@ KspSolve::Stats KspSolve::solve(long n, long N, const std::vector<long>& rows, c
                                 std::vector<double>& x_wanted, double rtol) {
   Impl& m = *impl_;
   // The matrix from coordinates (MatSetPreallocationCOO: entries of other ranks' rows are sent
-  // there, duplicates added), built again only when its pattern changed (the water's extent moved
-  // the rows that couple); otherwise only its values are set. Every rank decides alike (the
-  // decision is reduced), since the calls are collective.
+  // there, duplicates added), built again only when its pattern changed on some rank (GridPoisson:
+  // the node box moved); otherwise only its values are set. Every rank decides alike (the
+  // decisions are reduced), since the calls are collective.
   const bool same = n == m.n && N == m.N && m.A &&
                     std::equal(rows.begin(), rows.end(), m.rows.begin(), m.rows.end()) &&
                     std::equal(cols.begin(), cols.end(), m.cols.begin(), m.cols.end());
-  const bool resized = n != m.n || N != m.N;
+  const bool resized = any(n != m.n || N != m.N);
   if (any(!same)) {
     MatDestroy(&m.A);
     m.rows.assign(rows.begin(), rows.end());
@@ -136,8 +136,9 @@ KspSolve::Stats KspSolve::solve(long n, long N, const std::vector<long>& rows, c
   if (!setup && !converged) {
     petsc(VecZeroEntries(m.x));
     std::tie(its, converged) = run(true);
+  } else if (!setup) {
+    ++m.age;
   }
-  else if (!setup) ++m.age;
   if (m.age == 0) m.setup_iterations = its;
   m.fresh = its > 2 * m.setup_iterations + 10;
 

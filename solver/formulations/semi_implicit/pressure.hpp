@@ -328,8 +328,8 @@ class PressureStep {
   static constexpr double kTolerance = Poisson::kTolerance;
 
   /// Restart: the equations and reused factor of one rank's solver. Under mpirun there are none
-  /// (each solve is PETSc's, from scratch): a checkpoint written there holds none, and a resume
-  /// on one rank starts CHOLMOD afresh (its answers then agree with the uninterrupted run to the
+  /// (the solves are PETSc's, whose reused preconditioner a resume sets up again): a checkpoint
+  /// written there holds none, and a resume on one rank starts CHOLMOD afresh (its answers then agree with the uninterrupted run to the
   /// solver's tolerance); a resume under mpirun ignores a one-rank run's.
   void save(Checkpoint& c) const {
     if (parallel::ranks() == 1) poisson_.save(c, "formulation/poisson");
@@ -345,7 +345,7 @@ class PressureStep {
     if (domain_)
       return {{"pressure_solves", static_cast<double>(ksp_solves_), "distributed pressure solves (PETSc CG + BoomerAMG)"},
               {"pressure_ksp_iterations", static_cast<double>(ksp_iterations_), "CG iterations of the distributed solves"},
-              {"pressure_amg_setups", static_cast<double>(ranks_poisson_ ? ranks_poisson_->setups() : 0),
+              {"pressure_amg_setups", static_cast<double>(amg_setups_ + (ranks_poisson_ ? ranks_poisson_->setups() : 0)),
                "BoomerAMG setups (each reused as the preconditioner of later solves)"}};
     return {{"pressure_pattern_builds", static_cast<double>(poisson_.pattern_builds()),
              "new sparsity patterns of L (the set of unknown nodes changed)"},
@@ -425,6 +425,7 @@ class PressureStep {
   /// move (a rebalance). False when CG did not converge (an undetermined pressure).
   bool solve_on_ranks() {
     if (!ranks_poisson_ || ranks_cuts_ != domain_->column_cuts()) {
+      if (ranks_poisson_) amg_setups_ += ranks_poisson_->setups();
       ranks_cuts_ = domain_->column_cuts();
       ranks_poisson_ = std::make_unique<parallel::GridPoisson<Dim, S - 1>>(grid_, domain_->axis(), ranks_cuts_);
     }
@@ -476,7 +477,7 @@ class PressureStep {
   const parallel::Domain<Dim>* domain_ = nullptr;  // mpirun only
   std::unique_ptr<parallel::GridPoisson<Dim, S - 1>> ranks_poisson_;
   std::vector<int> ranks_cuts_;  // the column cuts ranks_poisson_ was built for
-  long ksp_solves_ = 0, ksp_iterations_ = 0;
+  long ksp_solves_ = 0, ksp_iterations_ = 0, amg_setups_ = 0;  // amg_setups_: of the solvers before a re-cut
 };
 
 }  // namespace swmpm::semi_implicit
