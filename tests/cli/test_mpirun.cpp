@@ -410,6 +410,25 @@ TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
   EXPECT_EQ(scene::read_pvd(one + "/output/results.pvd").size(), frames.size());
 }
 
+TEST(Mpirun, SemiImplicitTerzaghiOnTwoRanksFollowsTheOneRankRun) {
+  // examples/terzaghi-semi-implicit: the column along y, the cut across it, the drained top face
+  // and the traction on the upper rank; the base pore pressure history (monitors.csv) and the
+  // frames within 1e-6 of the one-rank run.
+  nlohmann::json s = load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene.json");
+  s["time"]["end"] = 0.1;
+  s["output"]["interval"] = 0.05;
+  const Pair p = solve_both(s, "mpirun-terzaghi-si", 2);
+  expect_close_answers(p, 0.025, 1e-6);
+  const auto one = read_monitors(p.one), many = read_monitors(p.many);
+  const auto &a = one.column("base.pore_pressure"), &b = many.column("base.pore_pressure");
+  ASSERT_EQ(a.size(), b.size());
+  double p_max = 0.0, worst = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) p_max = std::max(p_max, std::abs(a[k])), worst = std::max(worst, std::abs(a[k] - b[k]));
+  EXPECT_GT(p_max, 5000.0);  // the load is carried by the water at first (10 kPa)
+  EXPECT_LE(worst, 1e-6 * p_max);
+  std::cout << "base pore pressure: largest 2-rank difference " << worst << " Pa of " << p_max << " Pa\n";
+}
+
 TEST(Mpirun, SemiImplicitCheckpointOfTwoRanksResumesOnOneAndOnThree) {
   // The restart file of a semi-implicit run on two ranks holds the whole run and no pressure-solver
   // state: one rank resumes it with CHOLMOD afresh, three ranks with PETSc; both end within the
