@@ -455,14 +455,20 @@ TEST(Mpirun, SemiImplicitCheckpointOfTwoRanksResumesOnOneAndOnThree) {
   }
 }
 
+/// `scene` preprocessed into scratch(name)/run and solved on two ranks; `run` is set to its path.
+Result solve_on_two_ranks(const nlohmann::json& scene, const std::string& name, std::string& run) {
+  const fs::path dir = scratch(name);
+  std::ofstream(dir / "scene.json") << scene.dump(2);
+  run = (dir / "run").string();
+  EXPECT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run + " -q", dir).status, 0);
+  return mpirun(2, "solve " + run + " -q --threads 1", dir);
+}
+
 TEST(Mpirun, AFormulationNotYetOnSeveralRanksIsRefusedBeforeAnythingIsWritten) {
   nlohmann::json s = column_collapse(2, "bspline2");
   s["solver"]["stabilisation"] = {{"fbar", "modified"}};
-  const fs::path dir = scratch("mpirun-refused");
-  std::ofstream(dir / "scene.json") << s.dump(2);
-  const std::string run = (dir / "run").string();
-  ASSERT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run + " -q", dir).status, 0);
-  const Result r = mpirun(2, "solve " + run + " -q --threads 1", dir);
+  std::string run;
+  const Result r = solve_on_two_ranks(s, "mpirun-refused", run);
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find(run + "/scene.json: solver.stabilisation.fbar \"modified\" does not run on several ranks yet"),
             std::string::npos)
@@ -472,16 +478,12 @@ TEST(Mpirun, AFormulationNotYetOnSeveralRanksIsRefusedBeforeAnythingIsWritten) {
   EXPECT_FALSE(fs::exists(run + "/run.json"));
   EXPECT_FALSE(fs::exists(run + "/output"));
   // A formulation that does not run there yet: semi-implicit-double-point (its water points' set).
-  nlohmann::json dp = load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene-double-point.json");
-  const fs::path dir2 = scratch("mpirun-refused-double-point");
-  std::ofstream(dir2 / "scene.json") << dp.dump(2);
-  const std::string run2 = (dir2 / "run").string();
-  ASSERT_EQ(swmpm_cmd("preprocess " + (dir2 / "scene.json").string() + " -o " + run2 + " -q", dir2).status, 0);
-  const Result r2 = mpirun(2, "solve " + run2 + " -q --threads 1", dir2);
+  const Result r2 = solve_on_two_ranks(load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene-double-point.json"),
+                                       "mpirun-refused-double-point", run);
   EXPECT_EQ(r2.status, 2) << r2.err;
   EXPECT_NE(r2.err.find("formulation semi-implicit-double-point does not run on several ranks yet"), std::string::npos)
       << r2.err;
-  EXPECT_FALSE(fs::exists(run2 + "/run.json"));
+  EXPECT_FALSE(fs::exists(run + "/run.json"));
 }
 
 }  // namespace
