@@ -40,15 +40,27 @@ KspSolve::~KspSolve() = default;
 long KspSolve::setups() const { return impl_->setups; }
 
 namespace {
-/// CG with BoomerAMG on A (the solver's settings; PETSC_OPTIONS may override them).
-void create_ksp(::Mat A, double rtol, KSP& ksp) {
+/// CG on A with the preconditioner `kind` (the solver's settings; PETSC_OPTIONS may override them).
+void create_ksp(::Mat A, double rtol, KspSolve::Preconditioner kind, KSP& ksp) {
   petsc(KSPCreate(PETSC_COMM_WORLD, &ksp));
   petsc(KSPSetOperators(ksp, A, A));
   petsc(KSPSetType(ksp, KSPCG));
   PC pc;
   petsc(KSPGetPC(ksp, &pc));
-  petsc(PCSetType(pc, PCHYPRE));
-  petsc(PCHYPRESetType(pc, "boomeramg"));
+  if (kind == KspSolve::Preconditioner::redundant_cholesky) {
+    // Every rank factorises the whole system with CHOLMOD (PCREDUNDANT), reused as the one-rank
+    // path reuses its factor.
+    petsc(PCSetType(pc, PCREDUNDANT));
+    KSP inner;
+    PC inner_pc;
+    petsc(PCRedundantGetKSP(pc, &inner));
+    petsc(KSPGetPC(inner, &inner_pc));
+    petsc(PCSetType(inner_pc, PCCHOLESKY));
+    petsc(PCFactorSetMatSolverType(inner_pc, MATSOLVERCHOLMOD));
+  } else {
+    petsc(PCSetType(pc, PCHYPRE));
+    petsc(PCHYPRESetType(pc, "boomeramg"));
+  }
   petsc(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED));
   petsc(KSPSetTolerances(ksp, rtol, 0.0, PETSC_DEFAULT, 1000));
   // BoomerAMG's settings for 3D operators with wide stencils (a quadratic B-spline's row couples
@@ -109,11 +121,12 @@ KspSolve::Stats KspSolve::solve(long n, long N, const std::vector<long>& rows, c
   petsc(VecAssemblyBegin(m.b));
   petsc(VecAssemblyEnd(m.b));
 
-  // hypre's setup costs several solves: its hierarchy of an earlier step's L preconditions this
-  // step's (L changes only as the points move), as one rank reuses CHOLMOD's factor. Set up again
+  // A preconditioner's setup (hypre's hierarchy, a factorisation) costs several solves: that of
+  // an earlier step's L preconditions this step's (L changes only as the points move), as one
+  // rank reuses CHOLMOD's factor. Set up again
   // after kMaxAge solves, when CG needed more than twice the iterations (and 10 more) of the solve
   // right after the last setup, or did not converge with the old one.
-  if (!m.ksp) create_ksp(m.A, rtol, m.ksp);
+  if (!m.ksp) create_ksp(m.A, rtol, preconditioner_, m.ksp);
   else petsc(KSPSetOperators(m.ksp, m.A, m.A));
   // CG starts from the last solve's solution (the rows number the same nodes while the size
   // stays): the increments of consecutive steps differ little. The test stays |b - A x| <= rtol |b|.

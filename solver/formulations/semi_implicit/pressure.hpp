@@ -343,10 +343,10 @@ class PressureStep {
   template <class Counter>
   std::vector<Counter> counters() const {
     if (domain_)
-      return {{"pressure_solves", static_cast<double>(ksp_solves_), "distributed pressure solves (PETSc CG + BoomerAMG)"},
+      return {{"pressure_solves", static_cast<double>(ksp_solves_), "distributed pressure solves (PETSc CG)"},
               {"pressure_ksp_iterations", static_cast<double>(ksp_iterations_), "CG iterations of the distributed solves"},
-              {"pressure_amg_setups", static_cast<double>(amg_setups_ + (ranks_poisson_ ? ranks_poisson_->setups() : 0)),
-               "BoomerAMG setups (each reused as the preconditioner of later solves)"}};
+              {"pressure_preconditioner_setups", static_cast<double>(amg_setups_ + (ranks_poisson_ ? ranks_poisson_->setups() : 0)),
+               "BoomerAMG setups (3D) or CHOLMOD factorisations on every rank (2D), each reused by later solves"}};
     return {{"pressure_pattern_builds", static_cast<double>(poisson_.pattern_builds()),
              "new sparsity patterns of L (the set of unknown nodes changed)"},
             {"pressure_factorisations", static_cast<double>(poisson_.factorisations()), "CHOLMOD numeric factorisations"},
