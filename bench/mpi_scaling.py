@@ -29,17 +29,12 @@ MPI_ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CO
 def scene(name, nx, ny, nz, steps, h=0.1, formulation="dry"):
     E, rho = 1.0e7, 2000.0
     dt = 0.4 * h / (E / rho) ** 0.5
-    if formulation == "semi-implicit-single-point":
-        # Saturated, incompressible water (implicit pressure): the skeleton's P-wave with the
-        # saturated density sets dt.
-        nu, n, rho_s, rho_w = 0.3, 0.4, 2650.0, 1000.0
-        M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
-        dt = 0.4 * h / (M / ((1 - n) * rho_s + n * rho_w)) ** 0.5
-    if formulation == "explicit-single-point":
-        # Saturated (n = 0.4, water K_f = 2.2e9 Pa): the undrained P-wave sets dt,
-        # c = sqrt((K' + 4G/3 + K_f / n) / rho_sat).
+    if formulation in ("explicit-single-point", "semi-implicit-single-point"):
+        # Saturated (n = 0.4): the P-wave with the saturated density sets dt. Explicit: undrained,
+        # water K_f = 2.2e9 Pa, c = sqrt((K' + 4G/3 + K_f / n) / rho_sat); semi-implicit: the
+        # pressure is implicit (incompressible water), only the skeleton's K' + 4G/3.
         nu, n, Kf, rho_s, rho_w = 0.3, 0.4, 2.2e9, 2650.0, 1000.0
-        M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) + Kf / n
+        M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu)) + (Kf / n if formulation == "explicit-single-point" else 0.0)
         dt = 0.4 * h / (M / ((1 - n) * rho_s + n * rho_w)) ** 0.5
     ext = [nx * h, ny * h, nz * h]
     sc = {

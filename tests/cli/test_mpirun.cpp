@@ -9,6 +9,8 @@
 #include <cstdlib>
 #include <iostream>
 #include <numeric>
+#include <string>
+#include <vector>
 
 #include "support/run_helpers.hpp"
 
@@ -44,22 +46,35 @@ scene::PointCloud sorted_by_id(const scene::PointCloud& c) {
   return s;
 }
 
-/// Number of values that differ (bitwise) between two frames of the same particles, matched by id.
-long differing_values(const scene::PointCloud& a_in, const scene::PointCloud& b_in) {
+/// Calls fn(name, values of a, values of b) for the positions ("position", x y z per point) and
+/// each array of two frames of the same particles, matched by id. False (and a test failure) when
+/// the frames do not hold the same points and arrays.
+template <class Fn>
+bool for_each_value_array(const scene::PointCloud& a_in, const scene::PointCloud& b_in, Fn&& fn) {
   const auto a = sorted_by_id(a_in), b = sorted_by_id(b_in);
   EXPECT_EQ(a.size(), b.size());
   EXPECT_EQ(a.arrays.size(), b.arrays.size());
-  if (a.size() != b.size()) return -1;
-  long differ = 0;
+  if (a.size() != b.size()) return false;
+  std::vector<double> pa, pb;
   for (std::size_t k = 0; k < a.size(); ++k)
-    for (int d = 0; d < 3; ++d) differ += a.points[k][d] != b.points[k][d];
+    for (int d = 0; d < 3; ++d) pa.push_back(a.points[k][d]), pb.push_back(b.points[k][d]);
+  fn(std::string("position"), pa, pb);
   for (const auto& arr : a.arrays) {
     const auto* other = b.find(arr.name);
     EXPECT_NE(other, nullptr) << arr.name;
-    if (!other) return -1;
-    for (std::size_t k = 0; k < arr.values.size(); ++k) differ += arr.values[k] != other->values[k];
+    if (!other) return false;
+    fn(arr.name, arr.values, other->values);
   }
-  return differ;
+  return true;
+}
+
+/// Number of values that differ (bitwise) between two frames of the same particles, matched by id.
+long differing_values(const scene::PointCloud& a, const scene::PointCloud& b) {
+  long differ = 0;
+  const bool same_points = for_each_value_array(a, b, [&](const std::string&, const auto& va, const auto& vb) {
+    for (std::size_t k = 0; k < va.size(); ++k) differ += va[k] != vb[k];
+  });
+  return same_points ? differ : -1;
 }
 
 /// A granular column collapsing as it slides to the right at 1.5 m/s over a smooth floor: the
@@ -268,26 +283,20 @@ TEST(Mpirun, TerzaghiOnTwoRanksIsBitwiseTheOneRankRun) {
 
 /// The largest difference between two frames of the same particles (matched by id), per array
 /// relative to the array's largest magnitude in `a`; positions relative to `length`.
-double largest_relative_difference(const scene::PointCloud& a_in, const scene::PointCloud& b_in, double length,
+double largest_relative_difference(const scene::PointCloud& a, const scene::PointCloud& b, double length,
                                    std::string& where) {
-  const auto a = sorted_by_id(a_in), b = sorted_by_id(b_in);
-  EXPECT_EQ(a.size(), b.size());
-  if (a.size() != b.size()) return 1.0;
   double worst = 0.0;
-  for (std::size_t k = 0; k < a.size(); ++k)
-    for (int d = 0; d < 3; ++d)
-      if (const double e = std::abs(a.points[k][d] - b.points[k][d]) / length; e > worst) worst = e, where = "position";
-  for (const auto& arr : a.arrays) {
-    const auto* other = b.find(arr.name);
-    EXPECT_NE(other, nullptr) << arr.name;
-    if (!other) return 1.0;
-    double scale = 0.0;
-    for (double v : arr.values) scale = std::max(scale, std::abs(v));
-    if (scale == 0.0) scale = 1.0;
-    for (std::size_t k = 0; k < arr.values.size(); ++k)
-      if (const double e = std::abs(arr.values[k] - other->values[k]) / scale; e > worst) worst = e, where = arr.name;
-  }
-  return worst;
+  const bool same_points = for_each_value_array(a, b, [&](const std::string& name, const auto& va, const auto& vb) {
+    double scale = length;
+    if (name != "position") {
+      scale = 0.0;
+      for (double v : va) scale = std::max(scale, std::abs(v));
+      if (scale == 0.0) scale = 1.0;
+    }
+    for (std::size_t k = 0; k < va.size(); ++k)
+      if (const double e = std::abs(va[k] - vb[k]) / scale; e > worst) worst = e, where = name;
+  });
+  return same_points ? worst : 1.0;
 }
 
 /// Every frame of `many` within `tolerance` of the one-rank frame (largest_relative_difference,
