@@ -106,9 +106,9 @@ class GridPoisson {
 
   /// Solves L dp = rhs for the unknown nodes. `stencil` (K per node), `rhs`, `role` and `dp` (a
   /// prescribed node's increment) are grid arrays, finished for this rank's node columns and the
-  /// R above them; `box` (across the axis) holds every node with a role, the same on every rank. On return dp holds the solution at the unknown nodes of those columns and at
-  /// every node of the `ghost` columns below them (prescribed ones there to the solver's
-  /// tolerance). Collective.
+  /// R above them; `box` (across the axis) holds every node with a role, the same on every rank.
+  /// On return dp holds the solution at the unknown nodes of those columns and at every node of
+  /// the `ghost` columns below them (prescribed ones there to the solver's tolerance). Collective.
   KspSolve::Stats solve(const NodeBox<Dim>& box, const double* stencil, const double* rhs, const std::uint8_t* role,
                         double* dp, int ghost, double rtol) {
     const int me = rank();
@@ -181,7 +181,7 @@ class GridPoisson {
     });
     return stats;
   }
-  /// hypre setups so far (KspSolve::setups).
+  /// Preconditioner setups so far (KspSolve::setups).
   long setups() const { return ksp_.setups(); }
 
  private:
@@ -200,7 +200,6 @@ class GridPoisson {
   std::vector<int> cuts_;
   std::vector<long> offset_;  // per rank (and the total): its first row
   std::vector<int> owner_;    // per node column along the axis: its rank
-  // per node of this rank's rows: the last solve at which it or a neighbour had water
   KspSolve ksp_;
   std::vector<long> rows_, cols_, b_rows_, wanted_;
   std::vector<double> values_, b_values_, x_;
