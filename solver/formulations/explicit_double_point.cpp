@@ -27,14 +27,17 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <sstream>
 
 #include "solver/formulation.hpp"
 #include "solver/formulations/registry.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/parallel/particles.hpp"
 #include "solver/porous/drag.hpp"
 #include "solver/porous/free_surface.hpp"
 #include "solver/porous/permeability.hpp"
@@ -165,7 +168,8 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
     scatter_solid(ps, b);                                                                    // (2b)
     nodal_porosity();
     scatter_liquid_forces(ws, b);                                                            // (2c)
-    add_face_forces(grid_, face_forces_, solid_);
+    parallel::weigh_face_forces(domain_, grid_, face_forces_, carries_mass(solid_));
+    add_weighed_face_forces(grid_, face_forces_, solid_);
     lap("p2g");
 
     update_grid(dt);                                                                         // (3)
@@ -180,7 +184,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
     bcs_liquid_.apply(grid_, box_, liquid_nodes_.v, false);
     stop_at_grid_faces(ps);
     stop_at_grid_faces(ws);
-    if (tie_) porous::tie_positions(ps, st.index_of_id, partner_, ws);
+    if (tie_) report_untied(st, porous::tie_positions(ps, st.index_of_id, partner_, ws));
     lap("g2p + musl remap");
 
     long bad = update_solid(st, dt);                                                         // (5)
@@ -220,13 +224,16 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         c2_solid = std::max(c2_solid, M_s / rho_bar + K_L * ((1.0 - n) / (n * rho_S) + 1.0 / rho_L));
       }
     }
-    c_solid = std::sqrt(c2_solid);
     double v2_max = 0.0;
     for (const ParticleSet<Dim>* set : {&ps, &ws}) {
       const long m = static_cast<long>(set->size());
 #pragma omp parallel for schedule(static) reduction(max : v2_max) if (m > parallel_threshold)
       for (long p = 0; p < m; ++p) v2_max = std::max(v2_max, set->v[p].squaredNorm());
     }
+    std::array<double, 2> maxima{c2_solid, v2_max};
+    parallel::max(std::span<double>(maxima));  // over all ranks (mpirun)
+    c2_solid = maxima[0], v2_max = maxima[1];
+    c_solid = std::sqrt(c2_solid);
     const double v_max = std::sqrt(v2_max);
     const double h = grid_.h();
     const double dt_wave = h / (std::max(c_solid, c_liquid) + v_max);
@@ -281,22 +288,32 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
     const bool was_tied = tie_;
     tie_ = phase && phase->tie_water;
     if ((tie_ || (phase && phase->hydraulic_conductivity)) && partner_.empty())
-      partner_ = porous::coincident_points(st.solid, st.fluid);
+      partner_ = parallel::coincident_points(domain_, st.solid, st.fluid);  // over every rank's points (mpirun)
     // The phase's seepage velocities belong to its permeability, not the scene's: each liquid
     // point with a coincident solid point restarts at that point's velocity.
     if (!phase && (was_tied || fast_drainage_) && !partner_.empty())
-      porous::tie_velocities(st.solid, st.index_of_id, partner_, st.fluid);
+      report_untied(st, porous::tie_velocities(st.solid, st.index_of_id, partner_, st.fluid));
     fast_drainage_ = phase && phase->hydraulic_conductivity.has_value();
   }
   std::size_t active_cells(const State<Dim>& st) const override {
     return std::max(count_active_cells(grid_, st.solid), count_active_cells(grid_, st.fluid));
   }
+  std::string on_several_ranks(const scene::Scene& s) const override { return parallel::refused_on_several_ranks(s); }
+  std::vector<typename Formulation<Dim>::Counter> counters() const override {
+    return parallel::counters<typename Formulation<Dim>::Counter>(domain_);
+  }
+  /// mpirun: both sets over the ranks, the cuts balanced on their particles together.
+  void distribute(State<Dim>& st) override {
+    parallel::distribute<Shape>(domain_, grid_, st, schedule_, &wschedule_);
+    regroup_by_material(st.solid, material_particles_);
+  }
   /// Restart: both sets' schedule orders (the next reordering reads them) and the
-  /// initialisation's partners; every nodal field is rebuilt by each step from the points.
+  /// initialisation's partners (per water-point id: the same table on every rank); every nodal
+  /// field is rebuilt by each step from the points.
   void save(Checkpoint& c) const override {
     save_order(c, "formulation/schedule_order", schedule_);
     save_order(c, "formulation/water_schedule_order", wschedule_, "fluid");
-    c.put("formulation/partner", partner_);
+    c.put_global("formulation/partner", partner_);
   }
   void restore(const Checkpoint& c, State<Dim>& st) override {
     regroup_by_material(st.solid, material_particles_);
@@ -328,30 +345,42 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
 
   bool liquefied(const ParticleSet<Dim>& ps, int p) const { return ps.n[p] > skeleton_[ps.material[p]].n_max; }
 
+  /// A tied water point whose soil point this rank does not hold (tie_positions; mpirun only: a
+  /// tied pair shares its position and so its stripe).
+  static void report_untied(State<Dim>& st, long w) {
+    if (w >= 0)
+      st.health.report(w, "fluid", "tied water point whose soil point another rank holds (the pair's supports differ)");
+  }
+
   /// (0) Both sets in last step's schedule order every reorder_interval steps.
   bool reorder(State<Dim>& st) {
-    bool reordered = reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval);
-    ParticleSet<Dim>& ws = st.fluid;
-    if (st.step % reorder_interval == 0 && wschedule_.order().size() == ws.size() && !wschedule_.in_order()) {
-      wreorder_.apply(ws, wschedule_.order());
-      reordered = true;
-    }
-    return reordered;
+    const bool solid = reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval, &domain_);
+    return reorder_set(st.fluid, st.step, wschedule_, wreorder_, reorder_interval, &domain_) || solid;
   }
 
   /// (1) Shape data of both sets, the active node box (both sets'), the schedules, the solid's
-  /// face forces, and the box's nodes cleared.
+  /// face forces, and the box's nodes cleared. Under mpirun the points that crossed a cut move to
+  /// their rank first, and the box is the rank's (parallel::migrate_sets).
   void evaluate_shapes(State<Dim>& st, const StepContext& ctx) {
-    long bad = -1;
+    long bad = -1, wbad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, st.solid, sd_, bad);
+    NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, st.fluid, sdw_, wbad);
+    const auto moved = parallel::migrate_sets<Shape>(
+        domain_, grid_, st.step,
+        std::array<parallel::StepSet<Dim, S>, 2>{{{st.solid, schedule_, sd_, box_, bad}, {st.fluid, wschedule_, sdw_, wbox, wbad}}});
+    if (moved[0]) {
+      st.index_ids();
+      regroup_by_material(st.solid, material_particles_);
+    }
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
-    const NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, st.fluid, sdw_, bad);
-    if (bad >= 0) st.health.report(bad, "fluid", "liquid point left the grid (or position not finite)");
+    if (wbad >= 0) st.health.report(wbad, "fluid", "liquid point left the grid (or position not finite)");
     for (int a = 0; a < Dim; ++a) {
       box_.lo[a] = std::min(box_.lo[a], wbox.lo[a]);
       box_.hi[a] = std::max(box_.hi[a], wbox.hi[a]);
     }
+    box_ = domain_.node_box(box_);
     collect_face_forces<Shape>(grid_, loads_, st.solid, st.index_of_id, ctx.t, box_, face_forces_);
+    parallel::share_face_forces<Shape>(domain_, grid_, face_forces_, box_);  // mpirun: every rank's, in order
     transfer::build_schedule(grid_, sd_, schedule_);
     transfer::build_schedule(grid_, sdw_, wschedule_);
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
@@ -389,7 +418,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         s.V += N * V;
         s.drag += N * d;
       });
-    });
+    }, solid_.acc, node_);
   }
 
   /// (2a) Liquid points' P2G: M_L = sum N m, sum N m v, sum N m p (the nodal p_I = sum N m p / M_L
@@ -408,7 +437,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         s.V_L += N * V;
         s.Vw += N * Vw;
       });
-    });
+    }, liquid_nodes_.acc, node_);
   }
   /// The nodal porosity at the nodes with solid, the liquid's share of the mixture volume its
   /// points stand for, n_I = sum N V_w / sum N V (V_w = m / rho_L(p) a liquid point's own volume, V
@@ -459,7 +488,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         liquid_nodes_.acc[i].f.noalias() += N * mb + lq * dN - T * dN;
         solid_.acc[i].f += sq * dN - N * inter;
       });
-    });
+    }, liquid_nodes_.acc, solid_.acc);
   }
 
   /// (3) Per node and component, u the velocities at the end of the step:
@@ -688,6 +717,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
   StripeSchedule schedule_, wschedule_;
   Reorder<Dim> reorder_, wreorder_;
   FBar<Dim, S> fbar_;
+  parallel::Domain<Dim> domain_;  // mpirun: this rank's stripes and both sets' points
 };
 
 }  // namespace

@@ -65,30 +65,34 @@ std::vector<std::vector<int>> group_by_material(const ParticleSet<Dim>& ps, std:
   return groups;
 }
 
-/// Stores the particles in the schedule's order every `interval` steps (memory locality for the
-/// transfers; results stay thread-independent) and refreshes what indexes them. True if it did.
-/// Under mpirun (`domain` active) every rank takes the same steps, and the keys follow the new
-/// order (parallel::Domain::renumber), as the one-rank run's storage order does.
+/// Stores the particles of `ps` in the schedule's order every `interval` steps (memory locality
+/// for the transfers; results stay thread-independent). True if it moved them: the caller then
+/// refreshes what indexes them. Under mpirun (`domain` active) every rank takes the same steps,
+/// and the keys follow the new order (parallel::Domain::renumber), as the one-rank run's storage
+/// order does.
+template <int Dim>
+bool reorder_set(ParticleSet<Dim>& ps, long step, const StripeSchedule& schedule, Reorder<Dim>& reorder, long interval,
+                 parallel::Domain<Dim>* domain = nullptr) {
+  if (domain && domain->active()) {
+    if (step % interval != 0 || !schedule.built()) return false;
+    const bool moved = !schedule.in_order();
+    if (moved) reorder.apply(ps, schedule.order());
+    domain->renumber(ps);
+    return moved;
+  }
+  if (step % interval != 0 || schedule.order().size() != ps.size() || schedule.in_order()) return false;
+  reorder.apply(ps, schedule.order());
+  return true;
+}
+
+/// reorder_set of the soil points, with the id table and the material groups refreshed.
 template <int Dim>
 bool reorder_for_locality(State<Dim>& st, const StripeSchedule& schedule, Reorder<Dim>& reorder,
                           std::vector<std::vector<int>>& material_particles, long interval,
                           parallel::Domain<Dim>* domain = nullptr) {
-  ParticleSet<Dim>& ps = st.solid;
-  if (domain && domain->active()) {
-    if (st.step % interval != 0 || !schedule.built()) return false;
-    const bool moved = !schedule.in_order();
-    if (moved) {
-      reorder.apply(ps, schedule.order());
-      st.index_ids();
-      regroup_by_material(ps, material_particles);
-    }
-    domain->renumber(ps);
-    return moved;
-  }
-  if (st.step % interval != 0 || schedule.order().size() != ps.size() || schedule.in_order()) return false;
-  reorder.apply(ps, schedule.order());
+  if (!reorder_set(st.solid, st.step, schedule, reorder, interval, domain)) return false;
   st.index_ids();
-  regroup_by_material(ps, material_particles);
+  regroup_by_material(st.solid, material_particles);
   return true;
 }
 

@@ -114,6 +114,16 @@ std::string broadcast(const std::string& s) {
   return out;
 }
 
+std::vector<std::int64_t> broadcast(const std::vector<std::int64_t>& v) {
+  if (!g_started) return v;
+  Timed t;
+  long n = static_cast<long>(v.size());
+  MPI_Bcast(&n, 1, MPI_LONG, 0, world());
+  std::vector<std::int64_t> out = g_rank == 0 ? v : std::vector<std::int64_t>(static_cast<std::size_t>(n));
+  MPI_Bcast(out.data(), static_cast<int>(n), MPI_INT64_T, 0, world());
+  return out;
+}
+
 std::vector<std::vector<char>> gather_to_root(const std::vector<char>& bytes) {
   if (!g_started) return {bytes};
   Timed t;

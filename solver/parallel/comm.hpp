@@ -48,6 +48,7 @@ void max(std::span<long> v);
 std::vector<long> all_gather(long v);
 /// Rank 0's string on every rank.
 std::string broadcast(const std::string& s);
+std::vector<std::int64_t> broadcast(const std::vector<std::int64_t>& v);
 /// Bytes from every rank to rank 0, in rank order (rank 0 gets them all; the others an empty list).
 std::vector<std::vector<char>> gather_to_root(const std::vector<char>& bytes);
 /// Bytes from every rank to every rank, in rank order.

@@ -128,6 +128,9 @@ class Domain {
   Domain() = default;
 
   bool active() const { return ranks() > 1; }
+  /// Whether each rank holds only its share of the particles (distribute() has run); before, every
+  /// rank holds them all (a run's start, a resume's replay of the initialisation).
+  bool shared_out() const { return active() && !cuts_.empty(); }
   int axis() const { return axis_; }
   int width() const { return width_; }
   const std::vector<int>& cuts() const { return cuts_; }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -13,6 +14,7 @@
 #include "solver/grid/grid.hpp"
 #include "solver/loads.hpp"
 #include "solver/parallel/domain.hpp"
+#include "solver/porous/tie.hpp"
 #include "solver/shape/shape.hpp"
 #include "solver/transfer/schedule.hpp"
 #include "solver/transfer/transfer.hpp"
@@ -32,17 +34,27 @@ int first_node(const Grid<Dim>& g, const Vec<Dim>& x, const Vec<Dim>& l, int axi
 
 /// A run's start under mpirun: every rank read all particles (a fresh run's, or a checkpoint's
 /// with the schedule order restored for the whole set); each keeps its own and the part of the
-/// order that indexes them, and the schedule learns the exchange. Nothing at one rank.
+/// order that indexes them, and the schedule learns the exchange. With `water_schedule` (the
+/// double-point formulations) the water points too (set 1 of the domain), the cuts balanced on
+/// both sets' particles. Nothing at one rank.
 template <class Shape, int Dim>
-void distribute(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedule& schedule) {
+void distribute(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedule& schedule,
+                StripeSchedule* water_schedule = nullptr) {
   if (ranks() == 1) return;
   const int axis = transfer::stripe_axis(g);
-  const std::size_t whole = st.solid.size();
-  d.distribute(g, Shape::support, axis, {&st.solid}, [&](std::size_t, std::size_t p) {
-    return first_node<Shape>(g, st.solid.x[p], st.solid.l[p], axis);
+  std::vector<ParticleSet<Dim>*> sets{&st.solid};
+  std::vector<StripeSchedule*> schedules{&schedule};
+  if (water_schedule) sets.push_back(&st.fluid), schedules.push_back(water_schedule);
+  std::vector<std::size_t> whole;
+  for (const auto* ps : sets) whole.push_back(ps->size());
+  d.distribute(g, Shape::support, axis, sets, [&](std::size_t k, std::size_t p) {
+    return first_node<Shape>(g, sets[k]->x[p], sets[k]->l[p], axis);
   });
-  if (schedule.built() && schedule.order().size() == whole) schedule.restore_order(local_order(schedule.order(), st.solid.key));
-  schedule.set_exchange(d.exchange());
+  for (std::size_t k = 0; k < sets.size(); ++k) {
+    StripeSchedule& sc = *schedules[k];
+    if (sc.built() && sc.order().size() == whole[k]) sc.restore_order(local_order(sc.order(), sets[k]->key));
+    sc.set_exchange(d.exchange());
+  }
   st.index_ids();
 }
 
@@ -52,6 +64,17 @@ void distribute(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedu
                 std::vector<std::vector<int>>& material_particles) {
   distribute<Shape>(d, g, st, schedule);
   regroup_by_material(st.solid, material_particles);
+}
+
+/// porous::coincident_points over the whole run: under mpirun, once each rank holds its share of
+/// the points, rank 0 builds the table from the gathered sets and sends it to every rank (the same
+/// table on every rank, as one rank builds it). Collective then.
+template <int Dim>
+std::vector<std::int64_t> coincident_points(const Domain<Dim>& d, const ParticleSet<Dim>& soil,
+                                            const ParticleSet<Dim>& water) {
+  if (!d.shared_out()) return porous::coincident_points(soil, water);
+  const ParticleSet<Dim> whole_soil = gather_set(soil), whole_water = gather_set(water);
+  return broadcast(rank() == 0 ? porous::coincident_points(whole_soil, whole_water) : std::vector<std::int64_t>{});
 }
 
 /// What the explicit formulations cannot do on several ranks yet (Formulation::on_several_ranks):
@@ -70,26 +93,51 @@ std::vector<Counter> counters(const Domain<Dim>& d) {
   return c;
 }
 
-/// Step (1) under mpirun, after the shapes are evaluated: every kRebalanceInterval steps the cuts
-/// move to even out the particle counts; particles whose stripe another rank owns move there
-/// (their shapes, the box and `bad` are evaluated again); then the rank's node box. Returns
-/// whether this rank's particles changed (the caller regroups what indexes them).
+/// One particle set of a step under mpirun (set k of the Domain): its schedule, its shape data,
+/// its node box and its first bad particle as evaluate_shapes left them.
+template <int Dim, int S>
+struct StepSet {
+  ParticleSet<Dim>& ps;
+  StripeSchedule& schedule;
+  std::vector<shape::ShapeData<Dim, S>>& sd;
+  NodeBox<Dim>& box;
+  long& bad;
+};
+
+/// Step (1) under mpirun, after the shapes of every set are evaluated: every kRebalanceInterval
+/// steps the cuts move to even out the particle counts (of all sets together); particles whose
+/// stripe another rank owns move there (their set's shapes, box and `bad` are evaluated again).
+/// Returns, per set, whether this rank's particles changed (the caller regroups what indexes them
+/// and takes the node box). Collective.
+template <class Shape, int Dim, int S, std::size_t K>
+std::array<bool, K> migrate_sets(Domain<Dim>& d, const Grid<Dim>& g, long step, const std::array<StepSet<Dim, S>, K>& sets) {
+  std::array<bool, K> changed{};
+  if (!d.active()) return changed;
+  const int axis = d.axis();
+  if (step % kRebalanceInterval == 0 && step > 0) {
+    std::vector<long> per_stripe(static_cast<std::size_t>(d.stripes()), 0);
+    for (const auto& set : sets)
+      for (std::size_t p = 0; p < set.ps.size(); ++p)
+        ++per_stripe[static_cast<std::size_t>(std::min(d.stripes() - 1, set.sd[p].base[axis] / d.width()))];
+    if (d.rebalance(per_stripe, kRebalanceTolerance))
+      for (const auto& set : sets) set.schedule.set_exchange(d.exchange());
+  }
+  for (std::size_t k = 0; k < K; ++k) {
+    const auto& set = sets[k];
+    changed[k] = d.migrate(k, set.ps, [&](std::size_t p) { return set.sd[p].base[axis]; });
+    if (changed[k]) set.box = transfer::evaluate_shapes<Shape>(g, set.ps, set.sd, set.bad);
+  }
+  return changed;
+}
+
+/// migrate_sets for the soil points alone (the single-point formulations and dry), then the
+/// rank's node box. Returns whether this rank's particles changed.
 template <class Shape, int Dim, int S>
 bool own_particles(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedule& schedule,
                    std::vector<shape::ShapeData<Dim, S>>& sd, NodeBox<Dim>& box, long& bad) {
   if (!d.active()) return false;
-  ParticleSet<Dim>& ps = st.solid;
-  const int axis = d.axis();
-  if (st.step % kRebalanceInterval == 0 && st.step > 0) {
-    std::vector<long> per_stripe(static_cast<std::size_t>(d.stripes()), 0);
-    for (std::size_t p = 0; p < ps.size(); ++p) ++per_stripe[static_cast<std::size_t>(std::min(d.stripes() - 1, sd[p].base[axis] / d.width()))];
-    if (d.rebalance(per_stripe, kRebalanceTolerance)) schedule.set_exchange(d.exchange());
-  }
-  const bool changed = d.migrate(0, ps, [&](std::size_t p) { return sd[p].base[axis]; });
-  if (changed) {
-    st.index_ids();
-    box = transfer::evaluate_shapes<Shape>(g, ps, sd, bad);
-  }
+  const bool changed = migrate_sets<Shape>(d, g, st.step, std::array<StepSet<Dim, S>, 1>{{{st.solid, schedule, sd, box, bad}}})[0];
+  if (changed) st.index_ids();
   box = d.node_box(box);
   return changed;
 }

@@ -35,26 +35,36 @@ std::vector<std::int64_t> coincident_points(const ParticleSet<Dim>& soil, const 
 
 /// Each water point with a partner takes its soil point's position (partner: per water-point id,
 /// the soil point's id; soil_index_of_id: the soil points' current index of each id). The
-/// velocities stay the water's own.
+/// velocities stay the water's own. Returns the first water point whose partner this process does
+/// not hold (-1: none; under mpirun a tied pair has one position and one support, so one rank
+/// holds both).
 template <int Dim>
-void tie_positions(const ParticleSet<Dim>& soil, const std::vector<int>& soil_index_of_id,
+long tie_positions(const ParticleSet<Dim>& soil, const std::vector<int>& soil_index_of_id,
                    const std::vector<std::int64_t>& partner, ParticleSet<Dim>& water) {
   const long n = static_cast<long>(water.size());
-#pragma omp parallel for schedule(static) if (n > parallel_threshold)
+  long missing = n;
+#pragma omp parallel for schedule(static) reduction(min : missing) if (n > parallel_threshold)
   for (long p = 0; p < n; ++p) {
     const std::int64_t sid = partner[water.id[p]];
-    if (sid >= 0) water.x[p] = soil.x[soil_index_of_id[sid]];
+    if (sid < 0) continue;
+    if (const int q = soil_index_of_id[sid]; q >= 0) water.x[p] = soil.x[q];
+    else missing = std::min(missing, p);
   }
+  return missing == n ? -1 : missing;
 }
 
-/// Each water point with a partner takes its soil point's velocity.
+/// Each water point with a partner takes its soil point's velocity; returns as tie_positions.
 template <int Dim>
-void tie_velocities(const ParticleSet<Dim>& soil, const std::vector<int>& soil_index_of_id,
+long tie_velocities(const ParticleSet<Dim>& soil, const std::vector<int>& soil_index_of_id,
                     const std::vector<std::int64_t>& partner, ParticleSet<Dim>& water) {
+  long missing = -1;
   for (std::size_t p = 0; p < water.size(); ++p) {
     const std::int64_t sid = partner[water.id[p]];
-    if (sid >= 0) water.v[p] = soil.v[soil_index_of_id[sid]];
+    if (sid < 0) continue;
+    if (const int q = soil_index_of_id[sid]; q >= 0) water.v[p] = soil.v[q];
+    else if (missing < 0) missing = static_cast<long>(p);
   }
+  return missing;
 }
 
 }  // namespace swmpm::porous

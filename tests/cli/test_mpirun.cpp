@@ -281,6 +281,111 @@ TEST(Mpirun, TerzaghiOnTwoRanksIsBitwiseTheOneRankRun) {
   EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
 }
 
+/// The final frame of `run` (the last entry of results.pvd), or of its particle set `group`
+/// ("solid", "fluid": the last entry whose file name starts with it).
+scene::PointCloud last_frame(const std::string& run, const std::string& group = {}) {
+  const auto frames = scene::read_pvd(run + "/output/results.pvd");
+  for (auto f = frames.rbegin(); f != frames.rend(); ++f)
+    if (f->file.rfind(group, 0) == 0) return scene::read_vtu(run + "/output/" + f->file);
+  ADD_FAILURE() << run << ": no frame of " << group;
+  return {};
+}
+
+/// A restart test's two run directories of `scene` (preprocessed), the one-rank run solved to the end.
+struct RestartRuns {
+  fs::path dir;
+  std::string one, run;
+};
+RestartRuns restart_runs(const nlohmann::json& scene, const std::string& name) {
+  RestartRuns r;
+  r.dir = scratch(name);
+  std::ofstream(r.dir / "scene.json") << scene.dump(2);
+  r.one = (r.dir / "one").string(), r.run = (r.dir / "run").string();
+  EXPECT_EQ(swmpm_cmd("preprocess " + (r.dir / "scene.json").string() + " -o " + r.one + " -q", r.dir).status, 0);
+  EXPECT_EQ(swmpm_cmd("preprocess " + (r.dir / "scene.json").string() + " -o " + r.run + " -q", r.dir).status, 0);
+  EXPECT_EQ(swmpm_cmd("solve " + r.one + " -q --threads 1", r.dir).status, 0);
+  return r;
+}
+
+/// The saturated column of saturated_collapse under explicit-double-point (soil points and water
+/// points), sliding into a layer of free water on the floor: both sets cross the cut, the water's
+/// free surface and a water level gauge follow the wave, and the column's porosity passes the
+/// liquefaction bound where it dilates.
+nlohmann::json double_point_collapse(int dim, const std::string& shape) {
+  nlohmann::json s = saturated_collapse(dim, shape);
+  const bool three = dim == 3;
+  s["name"] = "double-point-collapse";
+  s["formulation"] = "explicit-double-point";
+  s["materials"][0]["maximum_porosity"] = 0.45;
+  s["materials"][1]["dynamic_viscosity"] = 1e-3;
+  s["bodies"][0]["initial"]["pore_pressure"] = "hydrostatic";
+  s["bodies"].push_back({{"name", "pool"},
+                         {"geometry",
+                          {{"type", "box"},
+                           {"min", three ? nlohmann::json{0.24, 0.0, 0.0} : nlohmann::json{0.24, 0.0}},
+                           {"max", three ? nlohmann::json{0.6, 0.08, 0.12} : nlohmann::json{0.6, 0.08}}}},
+                         {"fluid", "water"},
+                         {"particles_per_cell", 2},
+                         {"initial", {{"pore_pressure", "hydrostatic"}, {"water_table", 0.08}}}});
+  s["output"]["monitors"].push_back({{"name", "wave"},
+                                     {"at", three ? nlohmann::json{0.25, 0.01, 0.06} : nlohmann::json{0.25, 0.01}},
+                                     {"phase", "fluid"},
+                                     {"quantities", {"displacement_x", "pore_pressure"}}});
+  s["output"]["monitors"].push_back({{"name", "gauge"},
+                                     {"at", three ? nlohmann::json{0.45, 0.06} : nlohmann::json{0.45}},
+                                     {"quantities", {"water_level"}}});
+  return s;
+}
+
+TEST(Mpirun, ExplicitDoublePointOnTwoRanksIsBitwiseTheOneRankRun2D) {
+  const Pair p = solve_both(double_point_collapse(2, "gimp"), "mpirun-edp-2d", 2);
+  expect_same_answers(p);
+  const auto rj = load_json(p.many + "/run.json");
+  EXPECT_EQ(rj["status"], "completed");
+  EXPECT_GT(rj["counters"]["particles migrated"].get<double>(), 400.0);
+  EXPECT_GE(rj["counters"]["rebalances"].get<double>(), 1.0);
+}
+
+TEST(Mpirun, ExplicitDoublePointOnTwoRanksIsBitwiseTheOneRankRun3D) {
+  nlohmann::json s = double_point_collapse(3, "gimp");
+  s["time"]["end"] = 0.15;
+  const Pair p = solve_both(s, "mpirun-edp-3d", 2);
+  expect_same_answers(p);
+  const auto rj = load_json(p.many + "/run.json");
+  EXPECT_EQ(rj["status"], "completed");
+  EXPECT_GT(rj["counters"]["particles migrated"].get<double>(), 600.0);
+}
+
+TEST(Mpirun, ExplicitDoublePointTiedInitialisationAndCheckpointResumeOnOneAndThreeRanks) {
+  // An initialisation phase ties each water point of the column to its soil point while gravity
+  // grows (the partners found over both ranks' points), with its own permeability; the restart
+  // file of two ranks (both sets, both schedule orders, the partners) resumes on one rank and on
+  // three, each ending bit for bit on the uninterrupted one-rank run.
+  nlohmann::json s = double_point_collapse(2, "bspline2");
+  s["initialisation"] = {{"duration", 0.05}, {"gravity_ramp", 0.04}, {"tie_water", true}, {"hydraulic_conductivity", 0.1}};
+  s["time"]["dt"] = 5e-5;
+  s["time"]["end"] = 0.1;
+  s["output"]["checkpoint_interval"] = 0.05;
+  const Pair tied = solve_both(s, "mpirun-edp-tied", 2);
+  expect_same_answers(tied);
+  const auto [dir, one, run] = restart_runs(s, "mpirun-edp-restart");
+  const auto reference = last_frame(one, "solid"), water = last_frame(one, "fluid");
+  const std::string monitors = read_text(one + "/monitors.csv");
+  const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
+  ASSERT_EQ(two.status, 0) << two.err;
+  for (int ranks : {1, 3}) {
+    const Result r = ranks == 1 ? swmpm_cmd("solve " + run + " --resume -q --threads 1", dir)
+                                : mpirun(ranks, "solve " + run + " --resume -q --threads 1", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto rj = load_json(run + "/run.json");
+    EXPECT_EQ(rj["resumed_from_step"], 2000);  // 1000 steps of the phase, 1000 after
+    EXPECT_EQ(rj["ranks"], ranks);
+    EXPECT_EQ(differing_values(reference, last_frame(run, "solid")), 0) << ranks << " ranks";
+    EXPECT_EQ(differing_values(water, last_frame(run, "fluid")), 0) << ranks << " ranks";
+    EXPECT_EQ(read_text(run + "/monitors.csv"), monitors) << ranks << " ranks";
+  }
+}
+
 /// The largest difference between two frames of the same particles (matched by id), per array
 /// relative to the array's largest magnitude in `a`; positions relative to `length`.
 double largest_relative_difference(const scene::PointCloud& a, const scene::PointCloud& b, double length,
@@ -357,29 +462,6 @@ TEST(Mpirun, SemiImplicitSinglePointOnTwoRanksFollowsTheOneRankRun3D) {
   const double worst = expect_close_answers(p, 0.04, 1e-6);
   std::cout << "largest relative difference 2 ranks / 1 rank (3D): " << worst << "\n";
   EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
-}
-
-/// The final frame of `run` (the last entry of results.pvd).
-scene::PointCloud last_frame(const std::string& run) {
-  const auto frames = scene::read_pvd(run + "/output/results.pvd");
-  EXPECT_FALSE(frames.empty());
-  return scene::read_vtu(run + "/output/" + frames.back().file);
-}
-
-/// A restart test's two run directories of `scene` (preprocessed), the one-rank run solved to the end.
-struct RestartRuns {
-  fs::path dir;
-  std::string one, run;
-};
-RestartRuns restart_runs(const nlohmann::json& scene, const std::string& name) {
-  RestartRuns r;
-  r.dir = scratch(name);
-  std::ofstream(r.dir / "scene.json") << scene.dump(2);
-  r.one = (r.dir / "one").string(), r.run = (r.dir / "run").string();
-  EXPECT_EQ(swmpm_cmd("preprocess " + (r.dir / "scene.json").string() + " -o " + r.one + " -q", r.dir).status, 0);
-  EXPECT_EQ(swmpm_cmd("preprocess " + (r.dir / "scene.json").string() + " -o " + r.run + " -q", r.dir).status, 0);
-  EXPECT_EQ(swmpm_cmd("solve " + r.one + " -q --threads 1", r.dir).status, 0);
-  return r;
 }
 
 TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
