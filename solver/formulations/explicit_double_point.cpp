@@ -365,9 +365,8 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
     long bad = -1, wbad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, st.solid, sd_, bad);
     NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, st.fluid, sdw_, wbad);
-    const auto moved = parallel::migrate_sets<Shape>(
-        domain_, grid_, st.step,
-        std::array<parallel::StepSet<Dim, S>, 2>{{{st.solid, schedule_, sd_, box_, bad}, {st.fluid, wschedule_, sdw_, wbox, wbad}}});
+    const auto moved = parallel::migrate_sets<Shape>(domain_, grid_, st.step, parallel::StepSet{st.solid, schedule_, sd_, box_, bad},
+                                                     parallel::StepSet{st.fluid, wschedule_, sdw_, wbox, wbad});
     if (moved[0]) {
       st.index_ids();
       regroup_by_material(st.solid, material_particles_);

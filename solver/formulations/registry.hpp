@@ -75,6 +75,8 @@ bool reorder_set(ParticleSet<Dim>& ps, long step, const StripeSchedule& schedule
                  parallel::Domain<Dim>* domain = nullptr) {
   if (domain && domain->active()) {
     if (step % interval != 0 || !schedule.built()) return false;
+    // As one rank: no reordering with an order older than the set (points removed since it was built).
+    if (parallel::any(schedule.order().size() != ps.size())) return false;
     const bool moved = !schedule.in_order();
     if (moved) reorder.apply(ps, schedule.order());
     domain->renumber(ps);

@@ -50,6 +50,13 @@ struct StripeExchange::Impl {
   DM da = nullptr;
   mutable std::map<std::size_t, MPI_Datatype> types;  // a node's bytes as doubles
   mutable std::map<int, PetscSF> ghosts;               // per ghost width: owners' nodes -> my ghosts
+  /// add_ghosts_to_owners: the other ranks' ghost nodes in my columns -> slots here, per width.
+  struct GhostSums {
+    PetscSF sf = nullptr;
+    std::vector<PetscInt> node;   // per slot: my node it adds to
+    std::vector<double> values;   // per slot: the ghost's value (scratch)
+  };
+  mutable std::map<int, GhostSums> ghost_sums;
   std::array<int, 3> nodes{1, 1, 1};
   int axis = 0;
   std::vector<int> column_cuts;  // per rank its first node column, then the node count
@@ -66,6 +73,7 @@ struct StripeExchange::Impl {
     DMDestroy(&da);
     for (auto* sf : {&leaf_first[0], &leaf_first[1], &root_first[0], &root_first[1]}) PetscSFDestroy(sf);
     for (auto& [w, sf] : ghosts) PetscSFDestroy(&sf);
+    for (auto& [w, g] : ghost_sums) PetscSFDestroy(&g.sf);
     for (auto& [b, t] : types) MPI_Type_free(&t);
   }
 };
@@ -155,8 +163,7 @@ void StripeExchange::after_colour(int colour, void* nodes, std::size_t bytes, Re
   add_communication_seconds(MPI_Wtime() - t0, Traffic::exchange);
 }
 
-void StripeExchange::fill_ghosts(void* nodes, std::size_t bytes, int width) const {
-  const double t0 = MPI_Wtime();
+PetscSF_ptr StripeExchange::ghost_forest(int width) const {
   const Impl& m = *impl_;
   auto it = m.ghosts.find(width);
   if (it == m.ghosts.end()) {
@@ -181,9 +188,54 @@ void StripeExchange::fill_ghosts(void* nodes, std::size_t bytes, int width) cons
     petsc(PetscSFSetUp(sf));
     it = m.ghosts.emplace(width, sf).first;
   }
-  const MPI_Datatype t = m.type(bytes);
-  petsc(PetscSFBcastBegin(it->second, t, nodes, nodes, MPI_REPLACE));
-  petsc(PetscSFBcastEnd(it->second, t, nodes, nodes, MPI_REPLACE));
+  return it->second;
+}
+
+void StripeExchange::fill_ghosts(void* nodes, std::size_t bytes, int width) const {
+  const double t0 = MPI_Wtime();
+  const PetscSF sf = ghost_forest(width);
+  const MPI_Datatype t = impl_->type(bytes);
+  petsc(PetscSFBcastBegin(sf, t, nodes, nodes, MPI_REPLACE));
+  petsc(PetscSFBcastEnd(sf, t, nodes, nodes, MPI_REPLACE));
+  add_communication_seconds(MPI_Wtime() - t0, Traffic::exchange);
+}
+
+void StripeExchange::add_ghosts_to_owners(double* nodes, int width) const {
+  const double t0 = MPI_Wtime();
+  const Impl& m = *impl_;
+  auto it = m.ghost_sums.find(width);
+  if (it == m.ghost_sums.end()) {
+    // Roots: every other rank's ghost nodes in my own columns (in its node array); leaves: one slot
+    // each here, rank by rank, column by column, in flat order inside a column. One root per
+    // slot, so a broadcast fills the slots, which are then added in that order.
+    const int me = rank();
+    const int lo = m.column_cuts[static_cast<std::size_t>(me)], hi = m.column_cuts[static_cast<std::size_t>(me) + 1];
+    Impl::GhostSums g;
+    std::vector<PetscSFNode> roots;
+    for (int q = 0; q < ranks(); ++q) {
+      if (q == me) continue;
+      const int qlo = m.column_cuts[static_cast<std::size_t>(q)], qhi = m.column_cuts[static_cast<std::size_t>(q) + 1];
+      std::vector<PetscInt> slots;
+      std::vector<PetscSFNode> from;
+      auto owned_by_q = [&](int) { return q; };
+      for (const auto& [c0, c1] : {std::pair{std::max(0, qlo - width), qlo}, std::pair{qhi, std::min(m.nodes[m.axis], qhi + width)}})
+        add_columns(m.nodes, m.axis, std::max(c0, lo), std::min(c1, hi), owned_by_q, slots, from);
+      g.node.insert(g.node.end(), slots.begin(), slots.end());
+      roots.insert(roots.end(), from.begin(), from.end());
+    }
+    const PetscInt n_all = static_cast<PetscInt>(static_cast<std::size_t>(m.nodes[0]) * m.nodes[1] * m.nodes[2]);
+    petsc(PetscSFCreate(PETSC_COMM_WORLD, &g.sf));
+    petsc(PetscSFSetGraph(g.sf, n_all, static_cast<PetscInt>(roots.size()), nullptr, PETSC_COPY_VALUES, roots.data(),
+                          PETSC_COPY_VALUES));
+    petsc(PetscSFSetUp(g.sf));
+    it = m.ghost_sums.emplace(width, std::move(g)).first;
+  }
+  Impl::GhostSums& g = it->second;
+  g.values.resize(g.node.size());
+  const MPI_Datatype t = m.type(sizeof(double));
+  petsc(PetscSFBcastBegin(g.sf, t, nodes, g.values.data(), MPI_REPLACE));
+  petsc(PetscSFBcastEnd(g.sf, t, nodes, g.values.data(), MPI_REPLACE));
+  for (std::size_t k = 0; k < g.node.size(); ++k) nodes[g.node[k]] += g.values[k];
   add_communication_seconds(MPI_Wtime() - t0, Traffic::exchange);
 }
 

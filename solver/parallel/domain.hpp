@@ -43,6 +43,9 @@
 #include "solver/particles/particles.hpp"
 #include "solver/transfer/schedule.hpp"
 
+// PETSc's PetscSF, declared here as petscsf.h does, so that this header needs no PETSc.
+typedef struct _p_PetscSF* PetscSF_ptr;
+
 namespace swmpm::parallel {
 
 /// The exchange of shared node columns between the scatter's two colours (PETSc star forests,
@@ -61,8 +64,14 @@ class StripeExchange final : public NodeExchange {
   /// values its neighbour reads R nodes away (a stencil's reach). `nodes` as after_colour's; one
   /// PETSc star forest per width, built at its first use. Collective.
   void fill_ghosts(void* nodes, std::size_t bytes, int width) const;
+  /// The reverse of fill_ghosts for sums (PETSc's local-to-global ADD_VALUES): each rank's values
+  /// in its ghost columns (`width` either side) are added to their owners' nodes; the ghosts keep
+  /// theirs. For a sum over particles that sit up to `width` columns outside their rank's own
+  /// (after a step moved them). One double per node. Collective.
+  void add_ghosts_to_owners(double* nodes, int width) const;
 
  private:
+  PetscSF_ptr ghost_forest(int width) const;  // the star forest of fill_ghosts, built at its first use
   std::pair<int, int> owned_{0, 0};
   struct Impl;
   std::unique_ptr<Impl> impl_;
@@ -244,6 +253,11 @@ class Domain {
   template <class NodeArrayT>
   void fill_ghosts(NodeArrayT&& nodes, int width) const {
     if (active()) exchange_->fill_ghosts(nodes.data(), node_bytes(nodes), width);
+  }
+  /// StripeExchange::add_ghosts_to_owners of a node array of doubles (nothing at one rank). Collective.
+  template <class NodeArrayT>
+  void add_ghosts_to_owners(NodeArrayT&& nodes, int width) const {
+    if (active()) exchange_->add_ghosts_to_owners(nodes.data(), width);
   }
 
   /// Re-cuts for an equal particle count per rank when the counts differ by more than

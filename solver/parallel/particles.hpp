@@ -93,50 +93,57 @@ std::vector<Counter> counters(const Domain<Dim>& d) {
   return c;
 }
 
-/// One particle set of a step under mpirun (set k of the Domain): its schedule, its shape data,
-/// its node box and its first bad particle as evaluate_shapes left them.
-template <int Dim, int S>
+/// One particle set of a step under mpirun (set k of the Domain, k its place in the argument
+/// list): its schedule, its shape data, its node box and its first bad particle as
+/// evaluate_shapes left them.
+template <int Dim, class ShapeData>
 struct StepSet {
   ParticleSet<Dim>& ps;
   StripeSchedule& schedule;
-  std::vector<shape::ShapeData<Dim, S>>& sd;
+  std::vector<ShapeData>& sd;
   NodeBox<Dim>& box;
   long& bad;
 };
+template <int Dim, class ShapeData>
+StepSet(ParticleSet<Dim>&, StripeSchedule&, std::vector<ShapeData>&, NodeBox<Dim>&, long&) -> StepSet<Dim, ShapeData>;
 
 /// Step (1) under mpirun, after the shapes of every set are evaluated: every kRebalanceInterval
 /// steps the cuts move to even out the particle counts (of all sets together); particles whose
 /// stripe another rank owns move there (their set's shapes, box and `bad` are evaluated again).
 /// Returns, per set, whether this rank's particles changed (the caller regroups what indexes them
 /// and takes the node box). Collective.
-template <class Shape, int Dim, int S, std::size_t K>
-std::array<bool, K> migrate_sets(Domain<Dim>& d, const Grid<Dim>& g, long step, const std::array<StepSet<Dim, S>, K>& sets) {
-  std::array<bool, K> changed{};
+template <class Shape, int Dim, class... ShapeData>
+std::array<bool, sizeof...(ShapeData)> migrate_sets(Domain<Dim>& d, const Grid<Dim>& g, long step,
+                                                    const StepSet<Dim, ShapeData>&... sets) {
+  std::array<bool, sizeof...(ShapeData)> changed{};
   if (!d.active()) return changed;
   const int axis = d.axis();
   if (step % kRebalanceInterval == 0 && step > 0) {
     std::vector<long> per_stripe(static_cast<std::size_t>(d.stripes()), 0);
-    for (const auto& set : sets)
+    auto count = [&](const auto& set) {
       for (std::size_t p = 0; p < set.ps.size(); ++p)
         ++per_stripe[static_cast<std::size_t>(std::min(d.stripes() - 1, set.sd[p].base[axis] / d.width()))];
-    if (d.rebalance(per_stripe, kRebalanceTolerance))
-      for (const auto& set : sets) set.schedule.set_exchange(d.exchange());
+    };
+    (count(sets), ...);
+    if (d.rebalance(per_stripe, kRebalanceTolerance)) (sets.schedule.set_exchange(d.exchange()), ...);
   }
-  for (std::size_t k = 0; k < K; ++k) {
-    const auto& set = sets[k];
+  std::size_t k = 0;
+  auto migrate = [&](const auto& set) {
     changed[k] = d.migrate(k, set.ps, [&](std::size_t p) { return set.sd[p].base[axis]; });
     if (changed[k]) set.box = transfer::evaluate_shapes<Shape>(g, set.ps, set.sd, set.bad);
-  }
+    ++k;
+  };
+  (migrate(sets), ...);
   return changed;
 }
 
 /// migrate_sets for the soil points alone (the single-point formulations and dry), then the
 /// rank's node box. Returns whether this rank's particles changed.
-template <class Shape, int Dim, int S>
+template <class Shape, int Dim, class ShapeData>
 bool own_particles(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedule& schedule,
-                   std::vector<shape::ShapeData<Dim, S>>& sd, NodeBox<Dim>& box, long& bad) {
+                   std::vector<ShapeData>& sd, NodeBox<Dim>& box, long& bad) {
   if (!d.active()) return false;
-  const bool changed = migrate_sets<Shape>(d, g, st.step, std::array<StepSet<Dim, S>, 1>{{{st.solid, schedule, sd, box, bad}}})[0];
+  const bool changed = migrate_sets<Shape>(d, g, st.step, StepSet{st.solid, schedule, sd, box, bad})[0];
   if (changed) st.index_ids();
   box = d.node_box(box);
   return changed;

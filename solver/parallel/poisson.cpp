@@ -146,7 +146,13 @@ KspSolve::Stats KspSolve::solve(long n, long N, const std::vector<long>& rows, c
   };
   const bool setup = m.fresh || m.age >= kMaxAge;
   auto [its, converged] = run(setup);
-  if (!setup && !converged) {
+  if (!converged && its == 0) {
+    // A start far from this solution: KSP stops at once (DTOL, residual above 1e5 |b|) when |b|
+    // is much smaller than the last right-hand side. Again from zero, with this preconditioner.
+    petsc(VecZeroEntries(m.x));
+    std::tie(its, converged) = run(false);
+  }
+  if (!converged) {  // an old preconditioner: again from zero with a fresh setup
     petsc(VecZeroEntries(m.x));
     std::tie(its, converged) = run(true);
   } else if (!setup) {

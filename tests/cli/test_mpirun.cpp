@@ -464,6 +464,15 @@ TEST(Mpirun, SemiImplicitSinglePointOnTwoRanksFollowsTheOneRankRun3D) {
   EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
 }
 
+TEST(Mpirun, SemiImplicitSinglePointCellMomentsOnTwoRanksFollowsTheOneRankRun3D) {
+  // Quadratic B-splines in 3D (the operators from cell moments); some steps' right-hand sides are
+  // so much smaller than the last that CG must start from zero (parallel::GridPoisson).
+  const Pair p = solve_both(semi_implicit_collapse(3, "bspline2"), "mpirun-sisp-3d-moments", 2);
+  const double worst = expect_close_answers(p, 0.04, 1e-6);
+  std::cout << "largest relative difference 2 ranks / 1 rank (3D, cell moments): " << worst << "\n";
+  EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
+}
+
 TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
   // A fixed dt puts the last checkpoint (t = 0.275 s, step 1100) just before a step that stores
   // the particles in schedule order (every 10 steps): the restored schedule order is used at once.
@@ -546,6 +555,72 @@ TEST(Mpirun, SemiImplicitCheckpointOfTwoRanksResumesOnOneAndOnThree) {
   }
 }
 
+/// The saturated column of double_point_collapse (without the pool: this formulation models no
+/// free water) under semi-implicit-double-point: its soil and water points cross the cut, the
+/// pressure is a Poisson solve over the ranks with a free surface on the column's sides and top.
+nlohmann::json semi_implicit_double_point_collapse(int dim, const std::string& shape) {
+  nlohmann::json s = double_point_collapse(dim, shape);
+  s["formulation"] = "semi-implicit-double-point";
+  s["materials"][0].erase("maximum_porosity");
+  s["materials"][1].erase("dynamic_viscosity");
+  s["bodies"].erase(1);
+  s["output"]["monitors"].erase(4);  // the gauge
+  s["output"]["monitors"][3]["at"][0] = 0.15;  // a water point of the column's toe
+  s["time"]["end"] = 0.15;
+  return s;
+}
+
+TEST(Mpirun, SemiImplicitDoublePointOnTwoRanksFollowsTheOneRankRun2D) {
+  const Pair p = solve_both(semi_implicit_double_point_collapse(2, "gimp"), "mpirun-sidp-2d", 2);
+  const double worst = expect_close_answers(p, 0.02, 1e-6);
+  std::cout << "largest relative difference 2 ranks / 1 rank: " << worst << "\n";
+  const auto rj = load_json(p.many + "/run.json");
+  EXPECT_EQ(rj["status"], "completed");
+  EXPECT_GT(rj["counters"]["particles migrated"].get<double>(), 400.0);
+}
+
+TEST(Mpirun, SemiImplicitDoublePointOnTwoRanksFollowsTheOneRankRun3D) {
+  const Pair p = solve_both(semi_implicit_double_point_collapse(3, "gimp"), "mpirun-sidp-3d", 2);
+  const double worst = expect_close_answers(p, 0.04, 1e-6);
+  std::cout << "largest relative difference 2 ranks / 1 rank (3D): " << worst << "\n";
+  EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
+}
+
+TEST(Mpirun, SemiImplicitDoublePointEscapedWaterTiedInitialisationAndResumeAcrossRanks) {
+  // Escaped water removed (the water squeezed out of the collapsing column leaves the run, point
+  // by point, on the rank that holds it), after a tied initialisation; the checkpoint of two
+  // ranks resumes on one and on three ranks, within the solver's tolerance of the one-rank run.
+  nlohmann::json s = semi_implicit_double_point_collapse(2, "gimp");
+  s["solver"]["escaped_water"] = "remove";
+  s["materials"][0]["hydraulic_conductivity"] = 0.5;  // the water leaves the column as it collapses
+  s["initialisation"] = {{"duration", 0.04}, {"gravity_ramp", 0.03}, {"tie_water", true}};
+  s["time"]["dt"] = 2.5e-4;
+  s["time"]["end"] = 0.1;
+  s["output"]["checkpoint_interval"] = 0.05;
+  s["output"]["monitors"].erase(3);  // the toe's water point may leave the run
+  const Pair p = solve_both(s, "mpirun-sidp-escaped", 2);
+  expect_close_answers(p, 0.02, 1e-6);
+  const auto one = load_json(p.one + "/run.json"), many = load_json(p.many + "/run.json");
+  EXPECT_GT(one["counters"]["escaped_water_points"].get<double>(), 20.0);  // 29 (2026-12-06)
+  EXPECT_EQ(one["counters"]["escaped_water_points"], many["counters"]["escaped_water_points"]);
+  const auto [dir, ref, run] = restart_runs(s, "mpirun-sidp-restart");
+  const auto reference = last_frame(ref, "solid"), water = last_frame(ref, "fluid");
+  const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
+  ASSERT_EQ(two.status, 0) << two.err;
+  for (int ranks : {1, 3}) {
+    const Result r = ranks == 1 ? swmpm_cmd("solve " + run + " --resume -q --threads 1", dir)
+                                : mpirun(ranks, "solve " + run + " --resume -q --threads 1", dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto rj = load_json(run + "/run.json");
+    EXPECT_EQ(rj["resumed_from_step"], 400);  // t = 0.06 s: the interval counts from the phase's start
+    EXPECT_EQ(rj["ranks"], ranks);
+    EXPECT_EQ(rj["counters"]["escaped_water_points"], one["counters"]["escaped_water_points"]);
+    std::string where;
+    EXPECT_LE(largest_relative_difference(reference, last_frame(run, "solid"), 0.02, where), 1e-6) << ranks << ": " << where;
+    EXPECT_LE(largest_relative_difference(water, last_frame(run, "fluid"), 0.02, where), 1e-6) << ranks << ": " << where;
+  }
+}
+
 /// `scene` preprocessed into scratch(name)/run and solved on two ranks; `run` is set to its path.
 Result solve_on_two_ranks(const nlohmann::json& scene, const std::string& name, std::string& run) {
   const fs::path dir = scratch(name);
@@ -555,7 +630,7 @@ Result solve_on_two_ranks(const nlohmann::json& scene, const std::string& name, 
   return mpirun(2, "solve " + run + " -q --threads 1", dir);
 }
 
-TEST(Mpirun, AFormulationNotYetOnSeveralRanksIsRefusedBeforeAnythingIsWritten) {
+TEST(Mpirun, AnOptionNotYetOnSeveralRanksIsRefusedBeforeAnythingIsWritten) {
   nlohmann::json s = column_collapse(2, "bspline2");
   s["solver"]["stabilisation"] = {{"fbar", "modified"}};
   std::string run;
@@ -568,12 +643,11 @@ TEST(Mpirun, AFormulationNotYetOnSeveralRanksIsRefusedBeforeAnythingIsWritten) {
   EXPECT_EQ(r.err.find("does not run"), r.err.rfind("does not run")) << r.err;
   EXPECT_FALSE(fs::exists(run + "/run.json"));
   EXPECT_FALSE(fs::exists(run + "/output"));
-  // A formulation that does not run there yet: semi-implicit-double-point (its water points' set).
-  const Result r2 = solve_on_two_ranks(load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-semi-implicit/scene-double-point.json"),
-                                       "mpirun-refused-double-point", run);
+  // A formulation that does not run there yet: mpm-fem (its water on the grid).
+  const Result r2 = solve_on_two_ranks(load_json(SWMPM_SOURCE_DIR "/examples/terzaghi-mpm-fem/scene.json"),
+                                       "mpirun-refused-mpm-fem", run);
   EXPECT_EQ(r2.status, 2) << r2.err;
-  EXPECT_NE(r2.err.find("formulation semi-implicit-double-point does not run on several ranks yet"), std::string::npos)
-      << r2.err;
+  EXPECT_NE(r2.err.find("formulation mpm-fem does not run on several ranks yet"), std::string::npos) << r2.err;
   EXPECT_FALSE(fs::exists(run + "/run.json"));
 }
 

@@ -188,6 +188,50 @@ TEST(Domain, GhostColumnsGetTheirOwnersValues) {
   }
 }
 
+TEST(Domain, GhostSumsAddToTheirOwnersAsOneRankSums) {
+  // Each rank adds the masses of its points (after a move of up to a cell, so that some reach
+  // past its own columns) into its nodes, its own columns and the ghosts; add_ghosts_to_owners
+  // then fill_ghosts give every rank the sum over all points at its own and ghost nodes: the
+  // one-rank sum to rounding (the ranks' partial sums are added in another order).
+  const Grid<2> g = grid();
+  ParticleSet<2> whole = cloud(4000), mine = whole;
+  Domain<2> d;
+  const int axis = split(d, g, mine);
+  if (!d.active()) GTEST_SKIP() << "one rank";
+  constexpr int w = 2 * (S - 1);
+  auto moved = [&](const ParticleSet<2>& ps, std::size_t p) {  // alternately a cell's width either way
+    Vec<2> x = ps.x[p];
+    x[axis] += (ps.id[p] % 2 ? 0.95 : -0.95) * g.h();
+    return x;
+  };
+  auto masses = [&](const ParticleSet<2>& ps) {
+    NodeArray<double> m(g.num_nodes());
+    for (std::size_t p = 0; p < ps.size(); ++p) {
+      shape::ShapeData<2, S> sd;
+      shape::evaluate<Shape>(g, moved(ps, p), ps.l[p], sd);
+      shape::for_each_node(g, sd, [&](std::size_t i, double N, const auto&) { m[i] += N * ps.m[p]; });
+    }
+    return m;
+  };
+  const NodeArray<double> one = masses(whole);
+  NodeArray<double> m = masses(mine);
+  d.add_ghosts_to_owners(m, w);
+  d.fill_ghosts(m, w);
+  const std::vector<int> columns = d.column_cuts();
+  const int lo = columns[static_cast<std::size_t>(rank())], hi = columns[static_cast<std::size_t>(rank()) + 1];
+  double worst = 0.0, largest = 0.0;
+  long reached = 0;  // nodes of the ghost columns that a point of another rank reaches
+  g.for_each_node(g.all_nodes(), [&](std::size_t i, const auto& ijk) {
+    const int c = ijk[axis];
+    if (c < lo - w || c >= hi + w) return;
+    largest = std::max(largest, std::abs(one[i]));
+    worst = std::max(worst, std::abs(m[i] - one[i]));
+    if ((c < lo || c >= hi) && one[i] != 0.0) ++reached;
+  });
+  EXPECT_GT(reached, 0);
+  EXPECT_LE(worst, 1e-14 * largest) << "rank " << rank();
+}
+
 /// A grid and a point cloud in Dim dimensions for the Poisson tests: [0, 3] x [0, 1] (2D) or
 /// [0, 1.5] x [0, 0.5] x [0, 0.5] (3D), points uniform over the inner 80 % along x and over
 /// [0.1, top - 0.1] along the others, volumes of many magnitudes.

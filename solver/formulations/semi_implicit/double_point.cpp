@@ -20,6 +20,9 @@
 //       positions. Their porosity and volume (step 8h with the M_s erratum, eq. 36) come from the
 //       next step's nodal porosity, in its water P2G (docs/formulations.md, "Water points'
 //       porosity"); the initialisation's tie, or the escaped water's removal, last.
+#include <array>
+#include <span>
+
 #include "solver/formulations/semi_implicit/core.hpp"
 #include "solver/porous/free_surface.hpp"
 #include "solver/porous/tie.hpp"
@@ -34,7 +37,8 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
   using Core = semi_implicit::Core<Dim, Shape>;
   using Core::S, Core::kCellMoments, Core::reorder_interval;
   using Core::grid_, Core::box_, Core::schedule_, Core::reorder_, Core::material_particles_, Core::sd_,
-      Core::pressure_, Core::water_, Core::node_, Core::flip_;
+      Core::pressure_, Core::water_, Core::node_, Core::flip_, Core::domain_;
+  using Pressure = typename Core::Pressure;
 
  public:
   SemiImplicitDoublePoint(const scene::Scene& s, const State<Dim>& state)
@@ -51,9 +55,11 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
     this->derive_laplace_if_single_densities(state.solid, ws, [&](int p) { return rho_w_points_[ws.material[p]]; });
   }
   std::string name() const override { return "semi-implicit-double-point"; }
-  /// The water points' set (its own schedule, migration and exchanges) is not distributed yet.
-  std::string on_several_ranks(const scene::Scene&) const override {
-    return "formulation semi-implicit-double-point does not run on several ranks yet";
+  /// mpirun: both sets over the ranks, the cuts balanced on their particles together.
+  void distribute(State<Dim>& st) override {
+    parallel::distribute<Shape>(domain_, grid_, st, schedule_, &wschedule_);
+    regroup_by_material(st.solid, material_particles_);
+    pressure_.distribute(domain_);
   }
 
   void step(State<Dim>& st, const StepContext& ctx) override {
@@ -67,8 +73,7 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
 
     if (reorder(st)) lap("reorder");                                                         // (0)
 
-    this->evaluate_soil_shapes(st);                                                          // (1)
-    evaluate_water_shapes(st);
+    evaluate_shapes(st);                                                                     // (1)
     this->prepare_nodes(st, ctx);
     lap("shape functions");
 
@@ -102,7 +107,7 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
 
     this->update_soil(st, dt);                                                               // (8)-(9)
     porous::gather_free_points(grid_, sdw_, flip_, dt, ws, water_);  // the water points' G2P, positions
-    if (tie_) porous::tie_positions(ps, st.index_of_id, partner_, ws);
+    if (tie_) report_untied(st, porous::tie_positions(ps, st.index_of_id, partner_, ws));
     else if (remove_escaped_) remove_escaped_water(ws);
     lap("stress and porosity");
   }
@@ -122,18 +127,20 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
   void set_initialisation(State<Dim>& st, const scene::Initialisation* phase) override {
     // The phase's seepage velocities belong to its permeability, not the scene's: each water point
     // with a coincident soil point restarts at that point's velocity (see single_point.cpp).
-    if (this->set_phase(phase) && !partner_.empty()) porous::tie_velocities(st.solid, st.index_of_id, partner_, st.fluid);
+    if (this->set_phase(phase) && !partner_.empty())
+      report_untied(st, porous::tie_velocities(st.solid, st.index_of_id, partner_, st.fluid));
     tie_ = phase && phase->tie_water;
     if ((tie_ || (phase && phase->hydraulic_conductivity)) && partner_.empty())
-      partner_ = porous::coincident_points(st.solid, st.fluid);
+      partner_ = parallel::coincident_points(domain_, st.solid, st.fluid);  // over every rank's points (mpirun)
   }
   /// Restart: beyond the core's, the water points' schedule order, the initialisation's water-point
-  /// partners and the escaped-water totals. The output-only fields are complete in a checkpoint
-  /// (the loop completes them first), so nothing is stale after a restore.
+  /// partners and the escaped-water totals (the same on every rank under mpirun). The output-only
+  /// fields are complete in a checkpoint (the loop completes them first), so nothing is stale
+  /// after a restore.
   void save(Checkpoint& c) const override {
     this->save_core(c);
     save_order(c, "formulation/water_schedule_order", wschedule_, "fluid");
-    c.put("formulation/partner", partner_);
+    c.put_global("formulation/partner", partner_);
     c.header["formulation_state"] = {{"escaped_points", escaped_points_}, {"escaped_mass", escaped_mass_}};
   }
   void restore(const Checkpoint& c, State<Dim>& st) override {
@@ -162,9 +169,14 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
       water_output_stale_ = false;
       complete_water_porosity(st.solid, st.fluid);
     }
+    complete_soil_fields(st.solid);
+  }
+
+ private:
+  /// complete_output_fields of the soil points: p^{t+1} and v_w^{t+1}, with the step's shape data.
+  void complete_soil_fields(ParticleSet<Dim>& ps) {
     if (!output_fields_stale_) return;
     output_fields_stale_ = false;
-    ParticleSet<Dim>& ps = st.solid;
     const auto& dp = pressure_.dp();
     const long m = static_cast<long>(ps.size());
 #pragma omp parallel for schedule(static) if (m > parallel_threshold)
@@ -180,7 +192,6 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
     }
   }
 
- private:
   /// Double-point water P2G sums of one node in register pairs: {sum S m, sum S rho_w V} and, in
   /// 2D, sum S m v (3D: water_.acc's mv), one packed multiply-add each per point and node; copied
   /// into water_.acc and node_ after the pass. (With sum S m v as an Eigen vector here instead:
@@ -192,23 +203,36 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
 
   /// (0) Both sets in last step's schedule order every reorder_interval steps.
   bool reorder(State<Dim>& st) {
-    bool reordered = reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval);
-    ParticleSet<Dim>& ws = st.fluid;
-    if (st.step % reorder_interval == 0 && wschedule_.order().size() == ws.size() && !wschedule_.in_order()) {
-      wreorder_.apply(ws, wschedule_.order());
-      reordered = true;
-    }
-    return reordered;
+    const bool soil = reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval, &domain_);
+    return reorder_set(st.fluid, st.step, wschedule_, wreorder_, reorder_interval, &domain_) || soil;
   }
-  /// (1) The water points' shape data (weights only with the cell moments: they take no gradient
-  /// in the P2G, the moments, the G2P or the projection; the point-wise D^w and L need them), the
-  /// box of both sets, the water's schedule.
-  void evaluate_water_shapes(State<Dim>& st) {
-    long bad = -1;
-    const NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, st.fluid, sdw_, bad);
-    if (bad >= 0) st.health.report(bad, "fluid", "water point left the grid (or position not finite)");
+  /// (1) The shape data of the soil points and of the water points (weights only with the cell
+  /// moments: they take no gradient in the P2G, the moments, the G2P or the projection; the
+  /// point-wise D^w and L need them), the box of both sets, the water's schedule. Under mpirun the
+  /// points of both sets that crossed a cut move to their rank first (parallel::migrate_sets),
+  /// and the box is the rank's.
+  void evaluate_shapes(State<Dim>& st) {
+    long bad = -1, wbad = -1;
+    box_ = transfer::evaluate_shapes<Shape>(grid_, st.solid, sd_, bad);
+    NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, st.fluid, sdw_, wbad);
+    const auto moved = parallel::migrate_sets<Shape>(domain_, grid_, st.step, parallel::StepSet{st.solid, schedule_, sd_, box_, bad},
+                                                     parallel::StepSet{st.fluid, wschedule_, sdw_, wbox, wbad});
+    if (moved[0]) {
+      st.index_ids();
+      regroup_by_material(st.solid, material_particles_);
+    }
+    if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
+    if (wbad >= 0) st.health.report(wbad, "fluid", "water point left the grid (or position not finite)");
     this->join_box(wbox);
+    box_ = domain_.node_box(box_);
     transfer::build_schedule(grid_, sdw_, wschedule_);
+  }
+
+  /// A tied water point whose soil point this rank does not hold (tie_positions; mpirun only: a
+  /// tied pair shares its position and so its stripe).
+  static void report_untied(State<Dim>& st, long w) {
+    if (w >= 0)
+      st.health.report(w, "fluid", "tied water point whose soil point another rank holds (the pair's supports differ)");
   }
 
   /// A water point's porosity n_p and volume V = m / (n_p rho_w) (eq. 36: n V = n0 V0); returns V.
@@ -231,7 +255,7 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
     const bool laplace_derived = pressure_.laplace_derived();
     auto& surface = pressure_.surface();
     long bad = transfer::no_particle;
-    wschedule_.run([&](int p) __attribute__((always_inline)) {
+    auto scatter = [&](int p) __attribute__((always_inline)) {
       double np = 0.0;
       shape::for_each_node(grid_, sdw_[p], [&](std::size_t i, double N, const auto&) { np += N * node_[i].n; });
       if (!(np > 0.0 && np <= 1.0 + 1e-12)) {
@@ -254,7 +278,12 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
         else water_.acc[i].mv += N * mv;
         surface.add_at_node(i, N, x_lo, x_hi);
       });
-    });
+    };
+    // Under mpirun the scattered node arrays are exchanged at the cuts (StripeSchedule::run); the
+    // free surface's test reads the extents of supports starting below a node (the ghosts' too).
+    if constexpr (Dim == 2) wschedule_.run(scatter, water_sums_, surface.extents());
+    else wschedule_.run(scatter, water_sums_, water_.acc, surface.extents());
+    if constexpr (porous::SupportCut<Dim, Shape>::kBaseExtent) pressure_.fill_ghosts(surface.extents());
     // Into the node fields the rest of the step reads (and zero for the next step's points).
     this->grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) {
       WaterSums& w = water_sums_[i];
@@ -282,8 +311,8 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
     if constexpr (kCellMoments) {
       pressure_.assemble_from_moments(schedule_);
     } else {
-      schedule_.run([&](int p) { pressure_.template add_operators<true, false>(sd_[p], soil_point_weights(ps, p)); });
-      wschedule_.run([&](int p) { pressure_.template add_operators<false, true>(sdw_[p], water_point_weights(ws, p)); });
+      pressure_.run_operators(schedule_, [&](int p) { pressure_.template add_operators<true, false>(sd_[p], soil_point_weights(ps, p)); });
+      pressure_.run_operators(wschedule_, [&](int p) { pressure_.template add_operators<false, true>(sdw_[p], water_point_weights(ws, p)); });
     }
   }
   /// A soil point carries the soil's shares only, s = (1 - n) V and l = V (1 - n)/rho_s; a water
@@ -303,7 +332,12 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
   /// with the soil points' current shape functions, n_I = sum S m n / sum S m (1 where no soil),
   /// interpolated at each water point, V = m / (n rho_w). The soil's sums go in one thread in
   /// point order (the same numbers with any number of threads); frames are rare.
+  /// Under mpirun the step has moved the points by less than a cell since they were binned, so
+  /// their supports lie within kGhost columns of their rank's own: each rank sums its soil points,
+  /// the ghost columns' sums are added to their owners' (PETSc's ADD_VALUES) and the totals copied
+  /// back (the ranks' partial sums added in another order than one rank's: equal to rounding).
   void complete_water_porosity(const ParticleSet<Dim>& ps, ParticleSet<Dim>& ws) {
+    static_assert(Pressure::kGhost >= S, "a point's support after a step's move must lie within the ghost columns");
     long bad = -1;
     NodeBox<Dim> box = transfer::evaluate_shapes<Shape>(grid_, ps, out_sd_, bad);
     const NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, ws, out_sdw_, bad);
@@ -315,6 +349,13 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
       out_m_.resize(grid_.num_nodes());
       out_mn_.resize(grid_.num_nodes());
     }
+    if (domain_.active()) {  // the rank's own columns and the ghosts either side, on every other axis
+      const int a = domain_.axis();
+      const auto [lo, hi] = domain_.owned_columns();
+      for (int b = 0; b < Dim; ++b) box.lo[b] = 0, box.hi[b] = grid_.nodes_per_axis()[b] - 1;
+      box.lo[a] = std::max(0, lo - Pressure::kGhost);
+      box.hi[a] = std::min(grid_.nodes_per_axis()[a] - 1, hi + Pressure::kGhost - 1);
+    }
     grid_.for_each_node(box, [&](std::size_t i, const auto&) { out_m_[i] = out_mn_[i] = 0.0; });  // all the sets reach
     for (std::size_t p = 0; p < ps.size(); ++p) {
       const double m = ps.m[p], mn = m * ps.n[p];
@@ -322,6 +363,10 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
         out_m_[i] += N * m;
         out_mn_[i] += N * mn;
       });
+    }
+    for (auto* sums : {&out_m_, &out_mn_}) {
+      domain_.add_ghosts_to_owners(*sums, Pressure::kGhost);
+      domain_.fill_ghosts(*sums, Pressure::kGhost);
     }
     const long n = static_cast<long>(ws.size());
 #pragma omp parallel for schedule(static) if (n > parallel_threshold)
@@ -349,11 +394,16 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
 #pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) escaped_[p] = porous::volume_fraction_at_point(grid_, sdw_[p], soil_volume, support) < 0.5;
     const std::size_t n0 = ws.size();
-    std::size_t removed = 0;
+    long removed = 0;
+    double mass = 0.0;
     for (std::size_t p = 0; p < n0; ++p)
-      if (escaped_[p]) ++removed, escaped_mass_ += ws.m[p];
+      if (escaped_[p]) ++removed, mass += ws.m[p];
+    // The run's totals (mpirun: over the ranks, the same on every rank).
+    std::array<double, 2> totals{static_cast<double>(removed), mass};
+    parallel::sum(std::span<double>(totals));
+    escaped_points_ += static_cast<long>(totals[0]);
+    escaped_mass_ += totals[1];
     if (removed == 0) return;
-    escaped_points_ += static_cast<long>(removed);
     ws.for_each_field([&](auto& f) {
       if (f.size() != n0) return;  // fields the water points do not use
       std::size_t k = 0;
