@@ -27,8 +27,10 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <sstream>
 
 #include "solver/fem/fluid.hpp"
@@ -37,6 +39,7 @@
 #include "solver/formulations/registry.hpp"
 #include "solver/loads.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/parallel/particles.hpp"
 #include "solver/porous/free_surface.hpp"
 #include "solver/porous/permeability.hpp"
 #include "solver/porous/points.hpp"
@@ -152,6 +155,7 @@ class MpmFem final : public Formulation<Dim> {
     for (std::size_t i = 0; i < nodes; ++i) support_[i] = porous::basis_integral<Shape>(grid_, i);
     basis_.build(grid_);
     soil_box_ = empty_box();
+    has_soil_ = state.solid.size() > 0;  // every rank reads the whole set here (mpirun)
     whole_grid_ = s.solver.air.whole_grid;
     set_region(whole_grid_ ? all_cells() : wanted_region(points_node_box(state.solid), empty_box(), 1));
     if (initial_hydrostatic_pressure(s)) set_region(region_, /*count=*/false);  // p copied onto the region
@@ -166,7 +170,7 @@ class MpmFem final : public Formulation<Dim> {
     for (int a = 0; a < Dim; ++a) b[a] = ctx.gravity[a];
     StageClock lap(this->times_);
 
-    if (ps.size() > 0 && reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval))
+    if (has_soil_ && reorder_for_locality(st, schedule_, reorder_, material_particles_, reorder_interval, &domain_))
       lap("reorder");                                                                          // (0)
     soil_to_grid(st, ctx, b);                                                                  // (i)-(ii)
     lap("soil p2g");
@@ -207,7 +211,7 @@ class MpmFem final : public Formulation<Dim> {
     substep_ = (substep_ + 1) % substeps_;
     soil_time_ += dt;
 
-    if (ps.size() == 0) return;
+    if (!has_soil_) return;
     fluid_on_soil(dt);                                                                         // (v)
     update_soil_grid(dt);
     lap("soil grid update");
@@ -244,6 +248,9 @@ class MpmFem final : public Formulation<Dim> {
     double v2 = 0.0, vf2 = 0.0;
     for (std::size_t p = 0; p < ps.size(); ++p) v2 = std::max(v2, ps.v[p].squaredNorm());
     for (const auto& v : fluid_.v) vf2 = std::max(vf2, v.squaredNorm());
+    std::array<double, 3> maxima{c2, v2, -dt_couple};  // over all ranks (mpirun; the fluid's are every rank's)
+    parallel::max(std::span<double>(maxima));
+    c2 = maxima[0], v2 = maxima[1], dt_couple = -maxima[2];
     const double h = grid_.h(), c = std::sqrt(c2), vs = std::sqrt(v2), vf = std::sqrt(vf2);
     const double dt_soil = c > 0.0 ? h / (c + vs) : std::numeric_limits<double>::infinity();
     const double dt_fluid = vf > 0.0 ? h / vf : std::numeric_limits<double>::infinity();
@@ -268,6 +275,7 @@ class MpmFem final : public Formulation<Dim> {
     const auto& ps = st.solid;
     return fixed_order_sum(ps.size(), [&](std::size_t p) { return 0.5 * ps.m[p] * ps.v[p].squaredNorm(); }) +
            fluid_integral([&](const fem::FluidPoint<Dim>& f) { return 0.5 * f.n * f.rho * f.v.squaredNorm(); });
+    // (mpirun: every rank holds the whole fluid, rank 0 adds it; fluid_integral is 0 elsewhere)
   }
   double strain_energy(const State<Dim>& st) const override {
     return fixed_order_sum(st.solid.size(), [&](std::size_t p) {
@@ -282,6 +290,8 @@ class MpmFem final : public Formulation<Dim> {
     power += fluid_integral([&](const fem::FluidPoint<Dim>& f) { return f.n * f.rho * b.dot(f.v); });
     // A prescribed pressure on a grid face works on the fluid crossing it: -p int v.n_out dGamma,
     // int N_I dGamma the face's basis integral (B-splines: the face row's N is 1 on the face).
+    // (mpirun: rank 0's share, as the fluid's integrals.)
+    if (parallel::rank() == 0)
     for (const auto& pf : pressure_faces_) {
       NodeBox<Dim> face = grid_.all_nodes();
       face.lo[pf.axis] = face.hi[pf.axis] = pf.side == 0 ? 0 : grid_.nodes_per_axis()[pf.axis] - 1;
@@ -298,6 +308,12 @@ class MpmFem final : public Formulation<Dim> {
     damping_ = phase_damping(phase, scene_damping_);
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
+  /// mpirun: the soil points over the ranks (parallel::Domain); the fluid, the phase field and
+  /// their solves on every rank, whole (the soil's nodal fields shared first): see step.
+  std::string on_several_ranks(const scene::Scene& s) const override { return parallel::refused_on_several_ranks(s); }
+  void distribute(State<Dim>& st) override {
+    parallel::distribute<Shape>(domain_, grid_, st, schedule_, material_particles_);
+  }
 
   void complete_output_fields(State<Dim>& st, bool) override {
     // The pore pressure and the fluid's velocity at the soil points, from the nodal solution.
@@ -318,6 +334,7 @@ class MpmFem final : public Formulation<Dim> {
 
   GridFields grid_fields(const State<Dim>&) const override {
     GridFields gf;
+    if (parallel::rank() != 0) return gf;  // mpirun: every rank holds the whole grid; rank 0 writes it
     const auto& nn = grid_.nodes_per_axis();
     for (int a = 0; a < Dim; ++a) gf.nodes[a] = nn[a];
     const std::size_t n = grid_.num_nodes();
@@ -382,7 +399,7 @@ class MpmFem final : public Formulation<Dim> {
 
   std::vector<typename Formulation<Dim>::Counter> counters() const override {
     const double V = phase_.volume(fluid_.phi, fsoil_.n);
-    return {{"fluid steps", static_cast<double>(fluid_.solves), ""},
+    std::vector<typename Formulation<Dim>::Counter> c = {{"fluid steps", static_cast<double>(fluid_.solves), ""},
             {"fluid nodes (active region)", static_cast<double>(fgrid_.num_nodes()), ""},
             {"fluid region changes", static_cast<double>(region_changes_), ""},
             {"fluid factorisations", static_cast<double>(fluid_.factorisations()), ""},
@@ -391,23 +408,26 @@ class MpmFem final : public Formulation<Dim> {
             {"water volume change", water_volume0_ > 0.0 ? (V - water_target_) / water_volume0_ * 100.0 : 0.0, "%"},
             {"water volume corrected", water_volume0_ > 0.0 ? water_corrected_ / water_volume0_ * 100.0 : 0.0, "%"},
             {"water outflow", water_volume0_ > 0.0 ? (water_volume0_ - water_target_) / water_volume0_ * 100.0 : 0.0, "%"}};
+    domain_.add_counters(c);
+    return c;
   }
 
   // Restart: the fluid's nodal state (v^L, v^{L-1}, p, phi) and the schedule order. The LU factor
   // is not saved: a restored run factorises afresh at its first step, and so does a saving run at
-  // its next step (refactorise_), so that both continue with the same factor, bit for bit.
+  // its next step (refactorise_), so that both continue with the same factor, bit for bit. Under
+  // mpirun every rank holds the same fluid state (global arrays).
   void save(Checkpoint& c) const override {
     save_order(c, "formulation/schedule_order", schedule_);
-    c.put("formulation/fluid_v", v_);
-    c.put("formulation/fluid_v_old", v_old_);
-    c.put("formulation/fluid_p", p_);
-    c.put("formulation/phi", phi_);
+    c.put_global("formulation/fluid_v", v_);
+    c.put_global("formulation/fluid_v_old", v_old_);
+    c.put_global("formulation/fluid_p", p_);
+    c.put_global("formulation/phi", phi_);
     std::vector<double> region;
     for (int a = 0; a < Dim; ++a) region.insert(region.end(), {static_cast<double>(region_.lo[a]), static_cast<double>(region_.hi[a])});
     region.push_back(static_cast<double>(region_changes_));
-    c.put("formulation/fluid_region", region);
-    c.put("formulation/water_volume0", std::vector<double>{water_volume0_, water_target_, water_corrected_});
-    c.put("formulation/multirate", std::vector<double>{static_cast<double>(substep_), soil_time_, fluid_time_});
+    c.put_global("formulation/fluid_region", region);
+    c.put_global("formulation/water_volume0", std::vector<double>{water_volume0_, water_target_, water_corrected_});
+    c.put_global("formulation/multirate", std::vector<double>{static_cast<double>(substep_), soil_time_, fluid_time_});
     fluid_.refactorise();
   }
   void restore(const Checkpoint& c, State<Dim>& st) override {
@@ -530,8 +550,9 @@ class MpmFem final : public Formulation<Dim> {
     for (int a = 0; a < Dim; ++a) b.lo[a] = 0, b.hi[a] = -1;
     return b;
   }
-  /// The nodes the soil's points reach this step (empty without soil).
-  NodeBox<Dim> soil_nodes() const { return sd_.empty() ? empty_box() : box_; }
+  /// The nodes the soil's points reach this step (empty without soil; under mpirun every rank's
+  /// points: soil_extent_).
+  NodeBox<Dim> soil_nodes() const { return has_soil_ ? soil_extent_ : empty_box(); }
   /// The nodes points at these positions reach (before the first step's shape functions).
   NodeBox<Dim> points_node_box(const ParticleSet<Dim>& ps) const {
     if (ps.size() == 0) return empty_box();
@@ -695,18 +716,27 @@ class MpmFem final : public Formulation<Dim> {
   void soil_to_grid(State<Dim>& st, const StepContext& ctx, const Vec<Dim>& b) {
     ParticleSet<Dim>& ps = st.solid;
     const std::size_t nodes = grid_.num_nodes();
-    if (ps.size() == 0) {
+    if (!has_soil_) {
       if (soil_.n.size() != nodes) soil_.resize(nodes);
       return;
     }
     long bad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, ps, sd_, bad);
+    // Under mpirun: points that crossed a cut move to their rank first.
+    if (parallel::migrate_sets<Shape>(domain_, grid_, st.step, parallel::StepSet{ps, schedule_, sd_, box_, bad})[0]) {
+      st.index_ids();
+      regroup_by_material(ps, material_particles_);
+    }
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
     collect_face_forces<Shape>(grid_, loads_, ps, st.index_of_id, ctx.t, box_, face_forces_);
+    soil_extent_ = whole_box(box_);  // mpirun: every rank's points' nodes (the fluid region follows them)
+    box_ = domain_.node_box(box_);
+    parallel::share_face_forces<Shape>(domain_, grid_, face_forces_, box_);  // mpirun: every rank's, in order
     transfer::build_schedule(grid_, sd_, schedule_);
     transfer::clear_nodes(grid_, box_, solid_);
     transfer::scatter_mass_momentum_force(grid_, schedule_, ps, sd_, b, solid_);
-    add_face_forces(grid_, face_forces_, solid_);
+    parallel::weigh_face_forces(domain_, grid_, face_forces_, carries_mass(solid_));
+    add_weighed_face_forces(grid_, face_forces_, solid_);
     // theta, n and k (eqs. 78, 79, 81)
     grid_.parallel_for_each_node(box_, [&](std::size_t i, const auto&) { sums_[i] = SoilSums{}; });
     schedule_.run([&](int p) {
@@ -718,7 +748,7 @@ class MpmFem final : public Formulation<Dim> {
         s.Vs += N * (1.0 - n) * V;
         s.mk += N * ps.m[p] * k;
       });
-    });
+    }, sums_);
     // n = 1, theta = k = 0, v_s = 0 where no soil: reset where the soil was (its last node box)
     if (soil_.n.size() != nodes) soil_.resize(nodes);
     grid_.parallel_for_each_node(soil_box_, [&](std::size_t i, const auto&) {
@@ -741,6 +771,19 @@ class MpmFem final : public Formulation<Dim> {
       solid_.vL[i] = solid_.acc[i].mv / m;
       soil_.vs[i] = solid_.vL[i];
     });
+    // mpirun: the fluid (solved whole on every rank) and the cells of (v) read the soil's nodal
+    // fields anywhere: each rank's own columns to every rank.
+    domain_.share_owned_columns(soil_.n, soil_.theta, soil_.k, soil_.rho_p, soil_.vs);
+  }
+
+  /// The union of every rank's node box (one rank: `box`).
+  NodeBox<Dim> whole_box(NodeBox<Dim> box) const {
+    if (!domain_.active()) return box;
+    std::array<long, 2 * Dim> lohi;
+    for (int a = 0; a < Dim; ++a) lohi[a] = box.lo[a], lohi[Dim + a] = -static_cast<long>(box.hi[a]);
+    parallel::min(std::span<long>(lohi));
+    for (int a = 0; a < Dim; ++a) box.lo[a] = static_cast<int>(lohi[a]), box.hi[a] = static_cast<int>(-lohi[Dim + a]);
+    return box;
   }
 
   /// (v) The fluid's pressure on the skeleton and the drag coefficient, per node, integrated over
@@ -758,8 +801,10 @@ class MpmFem final : public Formulation<Dim> {
     fem::for_each_cell_coloured<Dim, S>(lo, hi, [&](const std::array<int, Dim>& c) {
       typename Basis::Cell& cl = cell_[omp_get_thread_num()];
       basis_.eval(c, cl);
+      // A cell with soil: a node with soil mass (rho_p > 0 exactly there; under mpirun known for
+      // every node, the cells reach below the rank's box).
       bool soil = false;
-      for (int k = 0; k < Basis::K; ++k) soil = soil || solid_.acc[cl.node[k]].m > transfer::empty_node_mass;
+      for (int k = 0; k < Basis::K; ++k) soil = soil || soil_.rho_p[cl.node[k]] > 0.0;
       if (!soil) return;
       fem::FluidPoint<Dim> f;
       for (int gp = 0; gp < Basis::G; ++gp) {
@@ -870,10 +915,13 @@ class MpmFem final : public Formulation<Dim> {
     shape::for_each_node(grid_, sd, [&](std::size_t i, double N, const Vec<Dim>&) { fn(i, N); });
   }
 
-  /// int g(fields) dOmega over the grid's cells (serial, fixed order): the fluid's energies.
+  /// int g(fields) dOmega over the grid's cells (serial, fixed order): the fluid's energies. Under
+  /// mpirun every rank holds the whole fluid: rank 0 gives the integral, the others 0 (the run
+  /// sums the ranks' energies).
   template <class Fn>
   double fluid_integral(Fn&& g) const {
     double sum = 0.0;
+    if (parallel::rank() != 0) return sum;
     typename Basis::Cell c;
     NodeBox<Dim> cells;
     for (int a = 0; a < Dim; ++a) cells.lo[a] = 0, cells.hi[a] = fgrid_.axis(a).cells - 1;
@@ -938,11 +986,14 @@ class MpmFem final : public Formulation<Dim> {
   Basis basis_;  // the B-splines on grid_'s cells (the soil's); fluid_.basis() is the region's
   std::vector<typename Basis::Cell> cell_;
   NodeBox<Dim> box_;
+  NodeBox<Dim> soil_extent_;  // the nodes every rank's soil points reach this step (one rank: box_)
+  bool has_soil_ = false;     // the run has soil points (on some rank)
   std::vector<shape::ShapeData<Dim, S>> sd_;
   std::vector<FaceForce<Dim, S>> face_forces_;
   StripeSchedule schedule_;
   Reorder<Dim> reorder_;
   FBar<Dim, S> fbar_;
+  parallel::Domain<Dim> domain_;  // mpirun: this rank's stripes and soil points
 };
 
 }  // namespace
