@@ -196,6 +196,9 @@ class Fluid {
   const Grid<Dim>& grid() const { return *grid_; }
   const Basis& basis() const { return basis_; }
   const FluidProperties& properties() const { return props_; }
+  /// The last step's assembled system (A with its prescribed rows, rhs): bench/fluid_ksp.cpp
+  /// hands it to PETSc's solvers.
+  const System& system() const { return sys_; }
   const Conditions& conditions() const { return bcs_; }
 
   std::vector<Vec<Dim>> v, v_old;  // m/s, nodal v^L and v^{L-1} (after step: v^{L+1}, v^L)

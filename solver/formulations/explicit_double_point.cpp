@@ -306,6 +306,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
   void distribute(State<Dim>& st) override {
     parallel::distribute<Shape>(domain_, grid_, st, schedule_, &wschedule_);
     regroup_by_material(st.solid, material_particles_);
+    fbar_.distribute(domain_);
   }
   /// Restart: both sets' schedule orders (the next reordering reads them) and the
   /// initialisation's partners (per water-point id: the same table on every rank); every nodal
@@ -365,12 +366,8 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
     long bad = -1, wbad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, st.solid, sd_, bad);
     NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, st.fluid, sdw_, wbad);
-    const auto moved = parallel::migrate_sets<Shape>(domain_, grid_, st.step, parallel::StepSet{st.solid, schedule_, sd_, box_, bad},
-                                                     parallel::StepSet{st.fluid, wschedule_, sdw_, wbox, wbad});
-    if (moved[0]) {
-      st.index_ids();
-      regroup_by_material(st.solid, material_particles_);
-    }
+    parallel::own_both_sets<Shape>(domain_, grid_, st, material_particles_, parallel::StepSet{st.solid, schedule_, sd_, box_, bad},
+                                   parallel::StepSet{st.fluid, wschedule_, sdw_, wbox, wbad});
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
     if (wbad >= 0) st.health.report(wbad, "fluid", "liquid point left the grid (or position not finite)");
     for (int a = 0; a < Dim; ++a) {

@@ -248,6 +248,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   }
   void distribute(State<Dim>& st) override {
     parallel::distribute<Shape>(domain_, grid_, st, schedule_, material_particles_);
+    fbar_.distribute(domain_);
   }
   // Restart: the last step's schedule order, which the next step's reordering (0) reads; every
   // other field is rebuilt by each step from the particles.

@@ -273,9 +273,9 @@ class MpmFem final : public Formulation<Dim> {
 
   double kinetic_energy(const State<Dim>& st) const override {
     const auto& ps = st.solid;
+    // mpirun: this rank's soil points; the fluid's on rank 0 (fluid_integral is 0 elsewhere).
     return fixed_order_sum(ps.size(), [&](std::size_t p) { return 0.5 * ps.m[p] * ps.v[p].squaredNorm(); }) +
            fluid_integral([&](const fem::FluidPoint<Dim>& f) { return 0.5 * f.n * f.rho * f.v.squaredNorm(); });
-    // (mpirun: every rank holds the whole fluid, rank 0 adds it; fluid_integral is 0 elsewhere)
   }
   double strain_energy(const State<Dim>& st) const override {
     return fixed_order_sum(st.solid.size(), [&](std::size_t p) {
@@ -290,15 +290,15 @@ class MpmFem final : public Formulation<Dim> {
     power += fluid_integral([&](const fem::FluidPoint<Dim>& f) { return f.n * f.rho * b.dot(f.v); });
     // A prescribed pressure on a grid face works on the fluid crossing it: -p int v.n_out dGamma,
     // int N_I dGamma the face's basis integral (B-splines: the face row's N is 1 on the face).
-    // (mpirun: rank 0's share, as the fluid's integrals.)
-    if (parallel::rank() == 0)
-    for (const auto& pf : pressure_faces_) {
-      NodeBox<Dim> face = grid_.all_nodes();
-      face.lo[pf.axis] = face.hi[pf.axis] = pf.side == 0 ? 0 : grid_.nodes_per_axis()[pf.axis] - 1;
-      const double sign = pf.side == 0 ? -1.0 : 1.0;
-      grid_.for_each_node(face, [&](std::size_t i, const auto&) {
-        power -= pf.value * sign * v_[i][pf.axis] * porous::basis_integral<Shape>(grid_, i, pf.axis);
-      });
+    if (parallel::rank() == 0) {  // mpirun: on rank 0, as the fluid's integrals
+      for (const auto& pf : pressure_faces_) {
+        NodeBox<Dim> face = grid_.all_nodes();
+        face.lo[pf.axis] = face.hi[pf.axis] = pf.side == 0 ? 0 : grid_.nodes_per_axis()[pf.axis] - 1;
+        const double sign = pf.side == 0 ? -1.0 : 1.0;
+        grid_.for_each_node(face, [&](std::size_t i, const auto&) {
+          power -= pf.value * sign * v_[i][pf.axis] * porous::basis_integral<Shape>(grid_, i, pf.axis);
+        });
+      }
     }
     loads_.for_each_force(ctx.t, st.index_of_id, [&](int p, const Vec<Dim>& f_p, const Vec<Dim>&, bool) { power += f_p.dot(ps.v[p]); });
     return power;
@@ -313,6 +313,7 @@ class MpmFem final : public Formulation<Dim> {
   std::string on_several_ranks(const scene::Scene& s) const override { return parallel::refused_on_several_ranks(s); }
   void distribute(State<Dim>& st) override {
     parallel::distribute<Shape>(domain_, grid_, st, schedule_, material_particles_);
+    fbar_.distribute(domain_);
   }
 
   void complete_output_fields(State<Dim>& st, bool) override {

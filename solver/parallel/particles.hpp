@@ -77,13 +77,9 @@ std::vector<std::int64_t> coincident_points(const Domain<Dim>& d, const Particle
   return broadcast(rank() == 0 ? porous::coincident_points(whole_soil, whole_water) : std::vector<std::int64_t>{});
 }
 
-/// What the explicit formulations cannot do on several ranks yet (Formulation::on_several_ranks):
-/// the modified F-bar's patch sums (a patch spans more than the two stripes of a cut).
-inline std::string refused_on_several_ranks(const scene::Scene& s) {
-  if (s.solver.stabilisation.fbar == "modified")
-    return "solver.stabilisation.fbar \"modified\" does not run on several ranks yet (\"standard\" does)";
-  return {};
-}
+/// What a scene asks that does not run on several ranks yet (Formulation::on_several_ranks):
+/// nothing now; the hook stays for what comes.
+inline std::string refused_on_several_ranks(const scene::Scene& /*s*/) { return {}; }
 
 /// The decomposition's counters (Domain::add_counters) as a formulation reports them.
 template <class Counter, int Dim>
@@ -135,6 +131,17 @@ std::array<bool, sizeof...(ShapeData)> migrate_sets(Domain<Dim>& d, const Grid<D
   };
   (migrate(sets), ...);
   return changed;
+}
+
+/// migrate_sets of the double-point formulations' two sets (the soil points set 0, the water
+/// points set 1); the id table and the soil's material groups follow its points. Collective.
+template <class Shape, int Dim, class SoilShapes, class WaterShapes>
+void own_both_sets(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, std::vector<std::vector<int>>& material_particles,
+                   const StepSet<Dim, SoilShapes>& soil, const StepSet<Dim, WaterShapes>& water) {
+  if (migrate_sets<Shape>(d, g, st.step, soil, water)[0]) {
+    st.index_ids();
+    regroup_by_material(st.solid, material_particles);
+  }
 }
 
 /// migrate_sets for the soil points alone (the single-point formulations and dry), then the

@@ -22,9 +22,11 @@
 // fixed for the whole run (the last patch of an axis may be cut by the grid's end); a particle
 // belongs to the patch holding its current position (x_{n+1}: the stage runs after G2P).
 //
-// Under mpirun the nodal sums go through the schedule's exchange like any scatter (standard runs on
-// several ranks); the patch sums of `modified` do not yet (a patch may span more than the two
-// stripes of a cut, and one rank sums it in storage order).
+// Under mpirun the nodal sums go through the schedule's exchange like any scatter. A patch of
+// `modified` may hold particles of several ranks near a cut, and one rank sums it in storage
+// order: each rank sums the patches only its particles can reach as one rank does, and the
+// patches within reach of a cut (boundary_patches) from every rank's records of them, added in
+// key order (the one-rank storage order): the one-rank sums bit for bit.
 //
 // Determinism: the nodal sums go through the formulation's StripeSchedule, the
 // patch sums through a second StripeSchedule of width 1 keyed by the row of patches (one row = one
@@ -32,7 +34,11 @@
 // particle. Results are bitwise identical for any thread count. No allocation after the first step.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -42,6 +48,7 @@
 #include "solver/formulation.hpp"
 #include "solver/grid/grid.hpp"
 #include "solver/materials/material.hpp"
+#include "solver/parallel/domain.hpp"
 #include "solver/particles/particles.hpp"
 #include "solver/shape/shape.hpp"
 #include "solver/transfer/schedule.hpp"
@@ -93,6 +100,7 @@ class FBar {
     const double ratio = s.solver.stabilisation.fbar_patch > 0.0 ? s.solver.stabilisation.fbar_patch
                                                                  : scene::default_fbar_patch(s.grid.shape_function);
     h_patch_ = ratio * g.h();
+    h_ = g.h();
     patches_ = 1;
     for (int a = 0; a < Dim; ++a) {
       origin_[a] = g.axis(a).origin;
@@ -104,6 +112,11 @@ class FBar {
   bool active() const { return mode_ != FBarMode::none; }
   FBarMode mode() const { return mode_; }
   double patch_size() const { return h_patch_; }  // m
+  /// Under mpirun: the decomposition whose cuts the patch sums of `modified` cross (nothing at
+  /// one rank). Called by the formulation's distribute().
+  void distribute(const parallel::Domain<Dim>& d) {
+    if (d.active()) domain_ = &d;
+  }
   std::size_t patches() const { return patches_; }
 
   /// Flat index of the patch holding x (clamped to the lattice).
@@ -198,6 +211,7 @@ class FBar {
       sum_[patch_[p]][0] += ps.m[p] * std::exp(ev_[p]);  // Σ m J^e
       sum_[patch_[p]][1] += ps.m[p];                     // Σ m
     });
+    if (domain_) sum_boundary_patches(ps);
 #pragma omp parallel for schedule(static) if (n > parallel_threshold)
     for (long p = 0; p < n; ++p) {
       const auto& s = sum_[patch_[p]];
@@ -205,7 +219,59 @@ class FBar {
     }
   }
 
+  /// mpirun: the patches within reach of a cut summed over every rank's particles in key order.
+  /// A particle of rank r has its first node in r's columns [c_r, c_{r+1}) and lies within S + 1
+  /// cells of it after the step's move, so a patch whose cells along the cut axis keep S + 2 from
+  /// every cut holds one rank's particles only (summed above, in key order already); the others
+  /// are summed here from the records (patch, key, m J^e, m) that every rank sends of them (an
+  /// all-gather: the particles near the cuts).
+  void sum_boundary_patches(const ParticleSet<Dim>& ps) {
+    const parallel::Domain<Dim>& d = *domain_;
+    const int axis = d.axis();
+    const std::vector<int> cuts = d.column_cuts();
+    std::size_t stride = 1;  // of the axis in the patch index (patch_of: x fastest)
+    for (int a = 0; a < axis; ++a) stride *= static_cast<std::size_t>(per_axis_[a]);
+    near_cut_.assign(static_cast<std::size_t>(per_axis_[axis]), 0);
+    const double cells_per_patch = h_patch_ / h_;
+    for (int j = 0; j < per_axis_[axis]; ++j) {
+      const int c0 = static_cast<int>(std::floor(j * cells_per_patch)), c1 = static_cast<int>(std::ceil((j + 1) * cells_per_patch));
+      for (std::size_t r = 1; r + 1 < cuts.size(); ++r)
+        if (c1 > cuts[r] - (S + 2) && c0 < cuts[r] + (S + 2)) near_cut_[static_cast<std::size_t>(j)] = 1;
+    }
+    struct Record {
+      std::int64_t patch, key;
+      double mJ, m;
+    };
+    std::vector<char> mine;
+    for (std::size_t p = 0; p < ps.size(); ++p) {
+      const std::size_t q = static_cast<std::size_t>(patch_[p]);
+      if (!near_cut_[(q / stride) % static_cast<std::size_t>(per_axis_[axis])]) continue;
+      const Record rec{static_cast<std::int64_t>(q), ps.key[p], ps.m[p] * std::exp(ev_[p]), ps.m[p]};
+      const char* b = reinterpret_cast<const char*>(&rec);
+      mine.insert(mine.end(), b, b + sizeof rec);
+    }
+    std::vector<Record> all;
+    for (const auto& part : parallel::all_gather(mine))
+      for (std::size_t k = 0; k < part.size() / sizeof(Record); ++k) {
+        Record rec;
+        std::memcpy(&rec, part.data() + k * sizeof rec, sizeof rec);
+        all.push_back(rec);
+      }
+    std::sort(all.begin(), all.end(), [](const Record& a, const Record& b) {
+      return a.patch != b.patch ? a.patch < b.patch : a.key < b.key;
+    });
+    for (std::size_t k = 0; k < all.size();) {  // each patch from zero, in key order, as one rank adds it
+      const std::size_t q = static_cast<std::size_t>(all[k].patch);
+      std::array<double, 2> sum{0.0, 0.0};
+      for (; k < all.size() && static_cast<std::size_t>(all[k].patch) == q; ++k) sum[0] += all[k].mJ, sum[1] += all[k].m;
+      sum_[q] = sum;
+    }
+  }
+
   FBarMode mode_ = FBarMode::none;
+  const parallel::Domain<Dim>* domain_ = nullptr;  // mpirun (distribute)
+  std::vector<char> near_cut_;                     // per patch column along the cut axis (mpirun)
+  double h_ = 0.0;                       // m, the grid's cell size
   double h_patch_ = 0.0;                 // m
   Vec<Dim> origin_ = Vec<Dim>::Zero();   // m, the lattice's corner (grid.min)
   std::array<int, Dim> per_axis_{};      // patches per axis

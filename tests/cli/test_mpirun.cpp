@@ -314,6 +314,12 @@ RestartRuns restart_runs(const nlohmann::json& scene, const std::string& name) {
   return r;
 }
 
+/// `swmpm solve RUN --resume` on `ranks` ranks (one: without mpirun), output under dir.
+Result resume(int ranks, const std::string& run, const fs::path& dir) {
+  const std::string args = "solve " + run + " --resume -q --threads 1";
+  return ranks == 1 ? swmpm_cmd(args, dir) : mpirun(ranks, args, dir);
+}
+
 /// The saturated column of saturated_collapse under explicit-double-point (soil points and water
 /// points), sliding into a layer of free water on the floor: both sets cross the cut, the water's
 /// free surface and a water level gauge follow the wave, and the column's porosity passes the
@@ -381,8 +387,7 @@ TEST(Mpirun, ExplicitDoublePointTiedInitialisationAndCheckpointResumeOnOneAndThr
   const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
   ASSERT_EQ(two.status, 0) << two.err;
   for (int ranks : {1, 3}) {
-    const Result r = ranks == 1 ? swmpm_cmd("solve " + run + " --resume -q --threads 1", dir)
-                                : mpirun(ranks, "solve " + run + " --resume -q --threads 1", dir);
+    const Result r = resume(ranks, run, dir);
     ASSERT_EQ(r.status, 0) << r.err;
     const auto rj = load_json(run + "/run.json");
     EXPECT_EQ(rj["resumed_from_step"], 2000);  // 1000 steps of the phase, 1000 after
@@ -430,6 +435,16 @@ double expect_close_answers(const Pair& p, double h, double tolerance) {
   return worst;
 }
 
+/// solve_both on `ranks` ranks, then expect_close_answers (1e-6) and a completed run; prints the
+/// largest difference, labelled `what`.
+Pair expect_follows(const nlohmann::json& scene, const std::string& name, int ranks, double h, const std::string& what) {
+  Pair p = solve_both(scene, name, ranks);
+  const double worst = expect_close_answers(p, h, 1e-6);
+  std::cout << "largest relative difference " << ranks << " ranks / 1 rank (" << what << "): " << worst << "\n";
+  EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
+  return p;
+}
+
 /// The saturated column of saturated_collapse under semi-implicit-single-point: the pressure is
 /// a Poisson solve over the ranks, with a free surface on every side but the floor.
 nlohmann::json semi_implicit_collapse(int dim, const std::string& shape) {
@@ -474,10 +489,7 @@ TEST(Mpirun, SemiImplicitSinglePointOnTwoRanksFollowsTheOneRankRun3D) {
 TEST(Mpirun, SemiImplicitSinglePointCellMomentsOnTwoRanksFollowsTheOneRankRun3D) {
   // Quadratic B-splines in 3D (the operators from cell moments); some steps' right-hand sides are
   // so much smaller than the last that CG must start from zero (parallel::GridPoisson).
-  const Pair p = solve_both(semi_implicit_collapse(3, "bspline2"), "mpirun-sisp-3d-moments", 2);
-  const double worst = expect_close_answers(p, 0.04, 1e-6);
-  std::cout << "largest relative difference 2 ranks / 1 rank (3D, cell moments): " << worst << "\n";
-  EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
+  expect_follows(semi_implicit_collapse(3, "bspline2"), "mpirun-sisp-3d-moments", 2, 0.04, "3D, cell moments");
 }
 
 TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
@@ -549,8 +561,7 @@ TEST(Mpirun, SemiImplicitCheckpointOfTwoRanksResumesOnOneAndOnThree) {
   const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
   ASSERT_EQ(two.status, 0) << two.err;
   for (int ranks : {1, 3}) {
-    const Result r = ranks == 1 ? swmpm_cmd("solve " + run + " --resume -q --threads 1", dir)
-                                : mpirun(ranks, "solve " + run + " --resume -q --threads 1", dir);
+    const Result r = resume(ranks, run, dir);
     ASSERT_EQ(r.status, 0) << r.err;
     const auto rj = load_json(run + "/run.json");
     EXPECT_EQ(rj["resumed_from_step"], 300);
@@ -578,19 +589,12 @@ nlohmann::json semi_implicit_double_point_collapse(int dim, const std::string& s
 }
 
 TEST(Mpirun, SemiImplicitDoublePointOnTwoRanksFollowsTheOneRankRun2D) {
-  const Pair p = solve_both(semi_implicit_double_point_collapse(2, "gimp"), "mpirun-sidp-2d", 2);
-  const double worst = expect_close_answers(p, 0.02, 1e-6);
-  std::cout << "largest relative difference 2 ranks / 1 rank: " << worst << "\n";
-  const auto rj = load_json(p.many + "/run.json");
-  EXPECT_EQ(rj["status"], "completed");
-  EXPECT_GT(rj["counters"]["particles migrated"].get<double>(), 400.0);
+  const Pair p = expect_follows(semi_implicit_double_point_collapse(2, "gimp"), "mpirun-sidp-2d", 2, 0.02, "double-point, 2D");
+  EXPECT_GT(load_json(p.many + "/run.json")["counters"]["particles migrated"].get<double>(), 400.0);
 }
 
 TEST(Mpirun, SemiImplicitDoublePointOnTwoRanksFollowsTheOneRankRun3D) {
-  const Pair p = solve_both(semi_implicit_double_point_collapse(3, "gimp"), "mpirun-sidp-3d", 2);
-  const double worst = expect_close_answers(p, 0.04, 1e-6);
-  std::cout << "largest relative difference 2 ranks / 1 rank (3D): " << worst << "\n";
-  EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
+  expect_follows(semi_implicit_double_point_collapse(3, "gimp"), "mpirun-sidp-3d", 2, 0.04, "double-point, 3D");
 }
 
 TEST(Mpirun, SemiImplicitDoublePointEscapedWaterTiedInitialisationAndResumeAcrossRanks) {
@@ -615,8 +619,7 @@ TEST(Mpirun, SemiImplicitDoublePointEscapedWaterTiedInitialisationAndResumeAcros
   const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
   ASSERT_EQ(two.status, 0) << two.err;
   for (int ranks : {1, 3}) {
-    const Result r = ranks == 1 ? swmpm_cmd("solve " + run + " --resume -q --threads 1", dir)
-                                : mpirun(ranks, "solve " + run + " --resume -q --threads 1", dir);
+    const Result r = resume(ranks, run, dir);
     ASSERT_EQ(r.status, 0) << r.err;
     const auto rj = load_json(run + "/run.json");
     EXPECT_EQ(rj["resumed_from_step"], 400);  // t = 0.06 s: the interval counts from the phase's start
@@ -704,8 +707,7 @@ TEST(Mpirun, MpmFemCheckpointOfTwoRanksResumesOnOneAndOnThreeBitForBit) {
   const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
   ASSERT_EQ(two.status, 0) << two.err;
   for (int ranks : {1, 3}) {
-    const Result r = ranks == 1 ? swmpm_cmd("solve " + run + " --resume -q --threads 1", dir)
-                                : mpirun(ranks, "solve " + run + " --resume -q --threads 1", dir);
+    const Result r = resume(ranks, run, dir);
     ASSERT_EQ(r.status, 0) << r.err;
     const auto rj = load_json(run + "/run.json");
     EXPECT_EQ(rj["resumed_from_step"], 160);
@@ -718,28 +720,18 @@ TEST(Mpirun, MpmFemCheckpointOfTwoRanksResumesOnOneAndOnThreeBitForBit) {
   }
 }
 
-/// `scene` preprocessed into scratch(name)/run and solved on two ranks; `run` is set to its path.
-Result solve_on_two_ranks(const nlohmann::json& scene, const std::string& name, std::string& run) {
-  const fs::path dir = scratch(name);
-  std::ofstream(dir / "scene.json") << scene.dump(2);
-  run = (dir / "run").string();
-  EXPECT_EQ(swmpm_cmd("preprocess " + (dir / "scene.json").string() + " -o " + run + " -q", dir).status, 0);
-  return mpirun(2, "solve " + run + " -q --threads 1", dir);
-}
-
-TEST(Mpirun, AnOptionNotYetOnSeveralRanksIsRefusedBeforeAnythingIsWritten) {
-  nlohmann::json s = column_collapse(2, "bspline2");
-  s["solver"]["stabilisation"] = {{"fbar", "modified"}};
-  std::string run;
-  const Result r = solve_on_two_ranks(s, "mpirun-refused", run);
-  EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_NE(r.err.find(run + "/scene.json: solver.stabilisation.fbar \"modified\" does not run on several ranks yet"),
-            std::string::npos)
-      << r.err;
-  // One message (the other rank stays silent), and no output.
-  EXPECT_EQ(r.err.find("does not run"), r.err.rfind("does not run")) << r.err;
-  EXPECT_FALSE(fs::exists(run + "/run.json"));
-  EXPECT_FALSE(fs::exists(run + "/output"));
+TEST(Mpirun, ModifiedFbarOnTwoAndThreeRanksIsBitwiseTheOneRankRun) {
+  // The patch averages of J^e (h_patch = 2 h here): the patches near a cut hold particles of two
+  // ranks (three ranks on this grid: every patch column is near a cut), summed from every rank's
+  // records in key order.
+  nlohmann::json dry = column_collapse(2, "bspline2");
+  dry["solver"]["stabilisation"] = {{"fbar", "modified"}};
+  expect_same_answers(solve_both(dry, "mpirun-mfbar-dry", 2));
+  expect_same_answers(solve_both(dry, "mpirun-mfbar-dry-3", 3));
+  nlohmann::json esp = saturated_collapse(3, "gimp");
+  esp["solver"]["stabilisation"] = {{"fbar", "modified"}};
+  esp["time"]["end"] = 0.15;
+  expect_same_answers(solve_both(esp, "mpirun-mfbar-esp", 2));
 }
 
 }  // namespace

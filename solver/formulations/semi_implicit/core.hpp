@@ -412,6 +412,7 @@ class Core : public Formulation<Dim> {
   void distribute(State<Dim>& st) override {
     parallel::distribute<Shape>(domain_, grid_, st, schedule_, material_particles_);
     pressure_.distribute(domain_);
+    fbar_.distribute(domain_);
   }
 
  protected:

@@ -60,6 +60,7 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
     parallel::distribute<Shape>(domain_, grid_, st, schedule_, &wschedule_);
     regroup_by_material(st.solid, material_particles_);
     pressure_.distribute(domain_);
+    this->fbar_.distribute(domain_);
   }
 
   void step(State<Dim>& st, const StepContext& ctx) override {
@@ -215,12 +216,8 @@ class SemiImplicitDoublePoint final : public semi_implicit::Core<Dim, Shape> {
     long bad = -1, wbad = -1;
     box_ = transfer::evaluate_shapes<Shape>(grid_, st.solid, sd_, bad);
     NodeBox<Dim> wbox = transfer::evaluate_shapes<Shape>(grid_, st.fluid, sdw_, wbad);
-    const auto moved = parallel::migrate_sets<Shape>(domain_, grid_, st.step, parallel::StepSet{st.solid, schedule_, sd_, box_, bad},
-                                                     parallel::StepSet{st.fluid, wschedule_, sdw_, wbox, wbad});
-    if (moved[0]) {
-      st.index_ids();
-      regroup_by_material(st.solid, material_particles_);
-    }
+    parallel::own_both_sets<Shape>(domain_, grid_, st, material_particles_, parallel::StepSet{st.solid, schedule_, sd_, box_, bad},
+                                   parallel::StepSet{st.fluid, wschedule_, sdw_, wbox, wbad});
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
     if (wbad >= 0) st.health.report(wbad, "fluid", "water point left the grid (or position not finite)");
     this->join_box(wbox);
