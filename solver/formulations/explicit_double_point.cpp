@@ -298,7 +298,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
   std::size_t active_cells(const State<Dim>& st) const override {
     return std::max(count_active_cells(grid_, st.solid), count_active_cells(grid_, st.fluid));
   }
-  std::string on_several_ranks(const scene::Scene& s) const override { return parallel::refused_on_several_ranks(s); }
+  std::string on_several_ranks(const scene::Scene&) const override { return {}; }  // every option runs on several ranks
   std::vector<typename Formulation<Dim>::Counter> counters() const override {
     return parallel::counters<typename Formulation<Dim>::Counter>(domain_);
   }

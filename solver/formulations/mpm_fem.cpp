@@ -310,7 +310,7 @@ class MpmFem final : public Formulation<Dim> {
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
   /// mpirun: the soil points over the ranks (parallel::Domain); the fluid, the phase field and
   /// their solves on every rank, whole (the soil's nodal fields shared first): see step.
-  std::string on_several_ranks(const scene::Scene& s) const override { return parallel::refused_on_several_ranks(s); }
+  std::string on_several_ranks(const scene::Scene&) const override { return {}; }  // every option runs on several ranks
   void distribute(State<Dim>& st) override {
     parallel::distribute<Shape>(domain_, grid_, st, schedule_, material_particles_);
     fbar_.distribute(domain_);
@@ -730,7 +730,7 @@ class MpmFem final : public Formulation<Dim> {
     }
     if (bad >= 0) st.health.report(bad, "solid", "left the grid (or position not finite)");
     collect_face_forces<Shape>(grid_, loads_, ps, st.index_of_id, ctx.t, box_, face_forces_);
-    soil_extent_ = whole_box(box_);  // mpirun: every rank's points' nodes (the fluid region follows them)
+    soil_extent_ = domain_.union_box(box_);  // mpirun: every rank's points' nodes (the fluid region follows them)
     box_ = domain_.node_box(box_);
     parallel::share_face_forces<Shape>(domain_, grid_, face_forces_, box_);  // mpirun: every rank's, in order
     transfer::build_schedule(grid_, sd_, schedule_);
@@ -777,15 +777,6 @@ class MpmFem final : public Formulation<Dim> {
     domain_.share_owned_columns(soil_.n, soil_.theta, soil_.k, soil_.rho_p, soil_.vs);
   }
 
-  /// The union of every rank's node box (one rank: `box`).
-  NodeBox<Dim> whole_box(NodeBox<Dim> box) const {
-    if (!domain_.active()) return box;
-    std::array<long, 2 * Dim> lohi;
-    for (int a = 0; a < Dim; ++a) lohi[a] = box.lo[a], lohi[Dim + a] = -static_cast<long>(box.hi[a]);
-    parallel::min(std::span<long>(lohi));
-    for (int a = 0; a < Dim; ++a) box.lo[a] = static_cast<int>(lohi[a]), box.hi[a] = static_cast<int>(-lohi[Dim + a]);
-    return box;
-  }
 
   /// (v) The fluid's pressure on the skeleton and the drag coefficient, per node, integrated over
   /// the cells that hold soil (eq. 54; Q lumped):

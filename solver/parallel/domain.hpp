@@ -223,11 +223,18 @@ class Domain {
   /// the union of the ranks' boxes on the other axes.
   NodeBox<Dim> node_box(NodeBox<Dim> box) const {
     if (!active()) return box;
+    box = union_box(box);
+    std::tie(box.lo[axis_], box.hi[axis_]) = box_columns();
+    return box;
+  }
+
+  /// The union of every rank's `box` (one rank: `box`). Collective.
+  NodeBox<Dim> union_box(NodeBox<Dim> box) const {
+    if (!active()) return box;
     std::array<long, 2 * Dim> lohi;
     for (int a = 0; a < Dim; ++a) lohi[a] = box.lo[a], lohi[Dim + a] = -static_cast<long>(box.hi[a]);
     min(std::span<long>(lohi));
     for (int a = 0; a < Dim; ++a) box.lo[a] = static_cast<int>(lohi[a]), box.hi[a] = static_cast<int>(-lohi[Dim + a]);
-    std::tie(box.lo[axis_], box.hi[axis_]) = box_columns();
     return box;
   }
 
@@ -260,47 +267,13 @@ class Domain {
     if (active()) exchange_->add_ghosts_to_owners(nodes.data(), width);
   }
 
-  /// Every rank's own node columns of `arrays` (node arrays whose elements are plain numbers,
-  /// e.g. NodeArray<double>, std::vector<Vec<Dim>>) copied to every other rank: afterwards each
-  /// rank holds the whole grid's values as their columns' owners computed them (a field that a
-  /// grid-wide stage, such as mpm-fem's fluid solved on every rank, reads anywhere). One
-  /// all-gather. Nothing at one rank. Collective.
+  /// Every rank's own node columns of `arrays` copied to every other rank (fill_ghosts as wide as
+  /// the grid): afterwards each rank holds the whole grid's values as their columns' owners
+  /// computed them (a field that a grid-wide stage, such as mpm-fem's fluid solved on every rank,
+  /// reads anywhere). Nothing at one rank. Collective.
   template <class... Arrays>
   void share_owned_columns(Arrays&... arrays) const {
-    if (!active()) return;
-    const std::vector<int> cuts = column_cuts();
-    // The nodes of columns [c0, c1) along the axis, in flat order, each visited by fn(i).
-    auto for_each_node_of = [&](int c0, int c1, auto&& fn) {
-      std::array<int, 3> lo{0, 0, 0}, hi{nodes_[0], nodes_[1], nodes_[2]};
-      lo[axis_] = c0, hi[axis_] = c1;
-      for (int k = lo[2]; k < hi[2]; ++k)
-        for (int j = lo[1]; j < hi[1]; ++j)
-          for (int i = lo[0]; i < hi[0]; ++i)
-            fn(static_cast<std::size_t>(i) + static_cast<std::size_t>(nodes_[0]) * (static_cast<std::size_t>(j) + static_cast<std::size_t>(nodes_[1]) * static_cast<std::size_t>(k)));
-    };
-    const std::size_t per_node = (sizeof(arrays[0]) + ...);
-    std::vector<char> mine;
-    const int me = rank();
-    mine.reserve(per_node * static_cast<std::size_t>(cuts[me + 1] - cuts[me]) * (static_cast<std::size_t>(nodes_[0]) * nodes_[1] * nodes_[2] / static_cast<std::size_t>(nodes_[axis_])));
-    for_each_node_of(cuts[me], cuts[me + 1], [&](std::size_t i) {
-      auto put = [&](const auto& a) {
-        const char* b = reinterpret_cast<const char*>(&a[i]);
-        mine.insert(mine.end(), b, b + sizeof(a[i]));
-      };
-      (put(arrays), ...);
-    });
-    const std::vector<std::vector<char>> all = all_gather(mine);
-    for (int r = 0; r < ranks(); ++r) {
-      if (r == me) continue;
-      const char* b = all[static_cast<std::size_t>(r)].data();
-      for_each_node_of(cuts[r], cuts[r + 1], [&](std::size_t i) {
-        auto get = [&](auto& a) {
-          std::memcpy(static_cast<void*>(&a[i]), b, sizeof(a[i]));
-          b += sizeof(a[i]);
-        };
-        (get(arrays), ...);
-      });
-    }
+    (fill_ghosts(arrays, nodes_[axis_]), ...);
   }
 
   /// Re-cuts for an equal particle count per rank when the counts differ by more than

@@ -77,10 +77,6 @@ std::vector<std::int64_t> coincident_points(const Domain<Dim>& d, const Particle
   return broadcast(rank() == 0 ? porous::coincident_points(whole_soil, whole_water) : std::vector<std::int64_t>{});
 }
 
-/// What a scene asks that does not run on several ranks yet (Formulation::on_several_ranks):
-/// nothing now; the hook stays for what comes.
-inline std::string refused_on_several_ranks(const scene::Scene& /*s*/) { return {}; }
-
 /// The decomposition's counters (Domain::add_counters) as a formulation reports them.
 template <class Counter, int Dim>
 std::vector<Counter> counters(const Domain<Dim>& d) {

@@ -320,6 +320,22 @@ Result resume(int ranks, const std::string& run, const fs::path& dir) {
   return ranks == 1 ? swmpm_cmd(args, dir) : mpirun(ranks, args, dir);
 }
 
+/// `run` (restart_runs) solved on two ranks to its end, then resumed from its last checkpoint (at
+/// `step`) on one rank and on three: check(ranks, run.json) after each resume.
+template <class Check>
+void resume_on_one_and_three(const std::string& run, const fs::path& dir, long step, Check&& check) {
+  const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
+  ASSERT_EQ(two.status, 0) << two.err;
+  for (int ranks : {1, 3}) {
+    const Result r = resume(ranks, run, dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto rj = load_json(run + "/run.json");
+    EXPECT_EQ(rj["resumed_from_step"], step);
+    EXPECT_EQ(rj["ranks"], ranks);
+    check(ranks, rj);
+  }
+}
+
 /// The saturated column of saturated_collapse under explicit-double-point (soil points and water
 /// points), sliding into a layer of free water on the floor: both sets cross the cut, the water's
 /// free surface and a water level gauge follow the wave, and the column's porosity passes the
@@ -384,18 +400,11 @@ TEST(Mpirun, ExplicitDoublePointTiedInitialisationAndCheckpointResumeOnOneAndThr
   const auto [dir, one, run] = restart_runs(s, "mpirun-edp-restart");
   const auto reference = last_frame(one, "solid"), water = last_frame(one, "fluid");
   const std::string monitors = read_text(one + "/monitors.csv");
-  const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
-  ASSERT_EQ(two.status, 0) << two.err;
-  for (int ranks : {1, 3}) {
-    const Result r = resume(ranks, run, dir);
-    ASSERT_EQ(r.status, 0) << r.err;
-    const auto rj = load_json(run + "/run.json");
-    EXPECT_EQ(rj["resumed_from_step"], 2000);  // 1000 steps of the phase, 1000 after
-    EXPECT_EQ(rj["ranks"], ranks);
+  resume_on_one_and_three(run, dir, 2000, [&](int ranks, const nlohmann::json&) {  // 1000 steps of the phase, 1000 after
     EXPECT_EQ(differing_values(reference, last_frame(run, "solid")), 0) << ranks << " ranks";
     EXPECT_EQ(differing_values(water, last_frame(run, "fluid")), 0) << ranks << " ranks";
     EXPECT_EQ(read_text(run + "/monitors.csv"), monitors) << ranks << " ranks";
-  }
+  });
 }
 
 /// The largest difference between two frames of the same particles (matched by id), per array
@@ -558,19 +567,12 @@ TEST(Mpirun, SemiImplicitCheckpointOfTwoRanksResumesOnOneAndOnThree) {
   s["output"]["checkpoint_interval"] = 0.075;
   const auto [dir, one, run] = restart_runs(s, "mpirun-sisp-restart");
   const auto reference = last_frame(one);
-  const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
-  ASSERT_EQ(two.status, 0) << two.err;
-  for (int ranks : {1, 3}) {
-    const Result r = resume(ranks, run, dir);
-    ASSERT_EQ(r.status, 0) << r.err;
-    const auto rj = load_json(run + "/run.json");
-    EXPECT_EQ(rj["resumed_from_step"], 300);
-    EXPECT_EQ(rj["ranks"], ranks);
+  resume_on_one_and_three(run, dir, 300, [&](int ranks, const nlohmann::json&) {
     std::string where;
     const double e = largest_relative_difference(reference, last_frame(run), 0.02, where);
     EXPECT_LE(e, 1e-6) << ranks << " ranks: " << where;
     std::cout << "resumed on " << ranks << " rank(s): largest relative difference " << e << "\n";
-  }
+  });
 }
 
 /// The saturated column of double_point_collapse (without the pool: this formulation models no
@@ -616,19 +618,12 @@ TEST(Mpirun, SemiImplicitDoublePointEscapedWaterTiedInitialisationAndResumeAcros
   EXPECT_EQ(one["counters"]["escaped_water_points"], many["counters"]["escaped_water_points"]);
   const auto [dir, ref, run] = restart_runs(s, "mpirun-sidp-restart");
   const auto reference = last_frame(ref, "solid"), water = last_frame(ref, "fluid");
-  const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
-  ASSERT_EQ(two.status, 0) << two.err;
-  for (int ranks : {1, 3}) {
-    const Result r = resume(ranks, run, dir);
-    ASSERT_EQ(r.status, 0) << r.err;
-    const auto rj = load_json(run + "/run.json");
-    EXPECT_EQ(rj["resumed_from_step"], 400);  // t = 0.06 s: the interval counts from the phase's start
-    EXPECT_EQ(rj["ranks"], ranks);
+  resume_on_one_and_three(run, dir, 400, [&](int ranks, const nlohmann::json& rj) {  // t = 0.06 s: the interval counts from the phase's start
     EXPECT_EQ(rj["counters"]["escaped_water_points"], one["counters"]["escaped_water_points"]);
     std::string where;
     EXPECT_LE(largest_relative_difference(reference, last_frame(run, "solid"), 0.02, where), 1e-6) << ranks << ": " << where;
     EXPECT_LE(largest_relative_difference(water, last_frame(run, "fluid"), 0.02, where), 1e-6) << ranks << ": " << where;
-  }
+  });
 }
 
 /// A saturated gravel block launched at 2 m/s through a pool (mpm-fem: the soil on points over the
@@ -704,20 +699,13 @@ TEST(Mpirun, MpmFemCheckpointOfTwoRanksResumesOnOneAndOnThreeBitForBit) {
   const auto [dir, one, run] = restart_runs(s, "mpirun-mpmfem-restart");
   const auto reference = last_frame(one, "solid"), grid = last_frame(one, "grid");
   const std::string monitors = read_text(one + "/monitors.csv");
-  const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
-  ASSERT_EQ(two.status, 0) << two.err;
-  for (int ranks : {1, 3}) {
-    const Result r = resume(ranks, run, dir);
-    ASSERT_EQ(r.status, 0) << r.err;
-    const auto rj = load_json(run + "/run.json");
-    EXPECT_EQ(rj["resumed_from_step"], 160);
-    EXPECT_EQ(rj["ranks"], ranks);
+  resume_on_one_and_three(run, dir, 160, [&](int ranks, const nlohmann::json&) {
     EXPECT_EQ(differing_values(reference, last_frame(run, "solid")), 0) << ranks << " ranks";
     const auto g = last_frame(run, "grid");
     ASSERT_EQ(g.arrays.size(), grid.arrays.size());
     for (std::size_t j = 0; j < g.arrays.size(); ++j) EXPECT_EQ(g.arrays[j].values, grid.arrays[j].values) << ranks << ": " << g.arrays[j].name;
     EXPECT_EQ(read_text(run + "/monitors.csv"), monitors) << ranks << " ranks";
-  }
+  });
 }
 
 TEST(Mpirun, ModifiedFbarOnTwoAndThreeRanksIsBitwiseTheOneRankRun) {

@@ -408,7 +408,7 @@ class Core : public Formulation<Dim> {
     domain_.add_counters(c);
     return c;
   }
-  std::string on_several_ranks(const scene::Scene& s) const override { return parallel::refused_on_several_ranks(s); }
+  std::string on_several_ranks(const scene::Scene&) const override { return {}; }  // every option runs on several ranks
   void distribute(State<Dim>& st) override {
     parallel::distribute<Shape>(domain_, grid_, st, schedule_, material_particles_);
     pressure_.distribute(domain_);
