@@ -120,7 +120,12 @@ class NodeSystem {
   bool is_fixed(long r) const { return fixed_[r] != 0; }
 
   /// Applies the prescribed unknowns to the assembled A and rhs (after assembly, before the solve).
-  void apply_fixed(double scale) {
+  /// Over ranks, each rank's A and rhs are its cells' part of the sums: the products moved to the
+  /// right-hand side add up, and only the owner of a prescribed row, an unknown in [own_lo, own_hi),
+  /// puts its identity and value.
+  void apply_fixed(double scale, long own_lo = 0, long own_hi = -1) {
+    if (own_hi < 0) own_hi = A.cols();
+    auto own = [&](long r) { return r >= own_lo && r < own_hi; };
     const int n = static_cast<int>(A.cols());
     const int* outer = A.outerIndexPtr();
     const int* inner = A.innerIndexPtr();
@@ -131,7 +136,7 @@ class NodeSystem {
       const double v = fixed_value_[col];
       for (int e = outer[col]; e < outer[col + 1]; ++e) {
         if (v != 0.0 && !fixed_[inner[e]]) rhs[inner[e]] -= val[e] * v;
-        val[e] = inner[e] == col ? scale : 0.0;
+        val[e] = inner[e] == col && own(col) ? scale : 0.0;
       }
     }
     // Rows of fixed unknowns in free columns.
@@ -141,7 +146,7 @@ class NodeSystem {
         if (fixed_[inner[e]]) val[e] = 0.0;
     }
     for (int r = 0; r < n; ++r)
-      if (fixed_[r]) rhs[r] = scale * fixed_value_[r];
+      if (fixed_[r]) rhs[r] = own(r) ? scale * fixed_value_[r] : 0.0;
   }
 
   linear::CscMatrix A;

@@ -29,10 +29,11 @@ Result mpirun(int n, const std::string& args, const fs::path& dir) {
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, read_text(out), read_text(err)};
 }
 
-/// A frame with its points in increasing id (a .pvtu holds each rank's piece in turn).
+/// A frame with its points in increasing id (a .pvtu holds each rank's piece in turn); a grid
+/// frame (mpm-fem's nodes, no ids: one file in node order) as it is.
 scene::PointCloud sorted_by_id(const scene::PointCloud& c) {
   const auto* id = c.find("id");
-  EXPECT_NE(id, nullptr);
+  if (!id) return c;
   std::vector<std::size_t> order(c.size());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](auto a, auto b) { return id->values[a] < id->values[b]; });
@@ -435,11 +436,99 @@ double expect_close_answers(const Pair& p, double h, double tolerance) {
   EXPECT_EQ(one.size(), many.size());
   double worst = 0.0;
   for (std::size_t k = 0; k < std::min(one.size(), many.size()); ++k) {
+    if (one[k].group == "grid") continue;  // mpm-fem's grid frames: expect_close_grids
     std::string where;
     const double e = largest_relative_difference(scene::read_vtu(p.one + "/output/" + one[k].file),
                                                  scene::read_vtu(p.many + "/output/" + many[k].file), h, where);
     EXPECT_LE(e, tolerance) << "frame " << k << " (t = " << one[k].time << " s): " << where;
     worst = std::max(worst, e);
+  }
+  return worst;
+}
+
+/// Two grid frames of mpm-fem (fluid velocity, pressure, phase field, porosity, solid fraction,
+/// in node order): the largest difference of each array relative to its largest magnitude in
+/// `a`, expected within `tolerance`; the fluid velocity of the air (nodes with phi < 1/2) within
+/// `air`: there the momentum equations' scale is rho_a / rho_w = 1/830 of the water's, and
+/// BiCGSTAB's test on the whole residual (|b - A x| <= 1e-8 |b|) resolves them the less. Returns
+/// the largest difference outside the air.
+double expect_close_grid(const scene::PointCloud& a, const scene::PointCloud& b, double tolerance, double air,
+                         const std::string& label) {
+  EXPECT_EQ(a.points, b.points) << label;
+  const auto* phi = a.find("phase_field");
+  EXPECT_NE(phi, nullptr) << label;
+  EXPECT_EQ(a.arrays.size(), b.arrays.size()) << label;
+  if (!phi || a.points != b.points) return 1.0;
+  double worst = 0.0;
+  for (const auto& arr : a.arrays) {
+    const auto* other = b.find(arr.name);
+    EXPECT_NE(other, nullptr) << label << ": " << arr.name;
+    if (!other) return 1.0;
+    double scale = 0.0, water = 0.0, in_air = 0.0;
+    for (double v : arr.values) scale = std::max(scale, std::abs(v));
+    if (scale == 0.0) scale = 1.0;
+    const auto c = static_cast<std::size_t>(arr.components);
+    for (std::size_t i = 0; i < arr.values.size(); ++i) {
+      const bool air_node = arr.name == "fluid_velocity" && phi->values[i / c] < 0.5;
+      double& largest = air_node ? in_air : water;
+      largest = std::max(largest, std::abs(arr.values[i] - other->values[i]) / scale);
+    }
+    EXPECT_LE(water, tolerance) << label << ": " << arr.name;
+    EXPECT_LE(in_air, air) << label << ": " << arr.name << " in the air";
+    worst = std::max(worst, water);
+  }
+  return worst;
+}
+
+/// Every grid frame of `many` against one rank's (expect_close_grid). Returns the largest difference.
+double expect_close_grids(const Pair& p, double tolerance, double air) {
+  const auto one = scene::read_pvd(p.one + "/output/results.pvd");
+  const auto many = scene::read_pvd(p.many + "/output/results.pvd");
+  double worst = 0.0;
+  long grids = 0;
+  for (std::size_t k = 0; k < std::min(one.size(), many.size()); ++k) {
+    if (one[k].group != "grid") continue;
+    ++grids;
+    const std::string label = "frame " + std::to_string(k) + " (t = " + std::to_string(one[k].time) + " s)";
+    worst = std::max(worst, expect_close_grid(scene::read_vtu(p.one + "/output/" + one[k].file),
+                                              scene::read_vtu(p.many + "/output/" + many[k].file), tolerance, air, label));
+  }
+  EXPECT_GT(grids, 1);
+  return worst;
+}
+
+/// Two monitors.csv of one scene: the same rows and columns, each number within `tolerance` of
+/// the first file's, relative to its column's largest magnitude (lines starting with # skipped).
+/// Returns the largest difference.
+double expect_close_monitors(const std::string& a_path, const std::string& b_path, double tolerance) {
+  auto rows = [](const std::string& text) {
+    std::vector<std::vector<std::string>> r;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line[0] == '#') continue;
+      std::vector<std::string> cells;
+      std::istringstream cs(line);
+      for (std::string cell; std::getline(cs, cell, ',');) cells.push_back(cell);
+      r.push_back(cells);
+    }
+    return r;
+  };
+  const auto a = rows(read_text(a_path)), b = rows(read_text(b_path));
+  EXPECT_EQ(a.size(), b.size());
+  EXPECT_GT(a.size(), 2u);
+  if (a.size() != b.size() || a.empty()) return 1.0;
+  EXPECT_EQ(a[0], b[0]);  // the header
+  std::vector<double> scale(a[0].size(), 0.0);
+  for (std::size_t i = 1; i < a.size(); ++i)
+    for (std::size_t j = 0; j < a[i].size() && j < scale.size(); ++j) scale[j] = std::max(scale[j], std::abs(std::stod(a[i][j])));
+  double worst = 0.0;
+  for (std::size_t i = 1; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].size(), b[i].size()) << "row " << i;
+    for (std::size_t j = 0; j < std::min(a[i].size(), b[i].size()); ++j) {
+      const double e = std::abs(std::stod(a[i][j]) - std::stod(b[i][j])) / (scale[j] > 0.0 ? scale[j] : 1.0);
+      EXPECT_LE(e, tolerance) << "row " << i << ", " << a[0][j];
+      worst = std::max(worst, e);
+    }
   }
   return worst;
 }
@@ -667,44 +756,65 @@ nlohmann::json mpm_fem_block(int dim) {
   return s;
 }
 
-TEST(Mpirun, MpmFemOnTwoRanksIsBitwiseTheOneRankRun2D) {
-  // The fluid and the phase field are solved whole on every rank from the soil's nodal fields,
-  // which every rank shares: the same system bit for bit, so the same answers bit for bit.
-  const Pair p = solve_both(mpm_fem_block(2), "mpirun-mpmfem-2d", 2);
-  expect_same_answers(p);  // the grid frames (fluid velocity, pressure, phase field, porosity) too
+/// The mpm-fem block on `ranks` ranks against one rank: the soil's frames, the grid's and
+/// monitors.csv, each within its tolerance; prints the largest differences.
+Pair expect_mpm_fem_follows(const nlohmann::json& scene, const std::string& name, int ranks, double h, double soil,
+                            double grid, double air, double monitors) {
+  Pair p = solve_both(scene, name, ranks);
+  const double s = expect_close_answers(p, h, soil), g = expect_close_grids(p, grid, air);
+  const double m = expect_close_monitors(p.one + "/monitors.csv", p.many + "/monitors.csv", monitors);
+  std::cout << "largest relative difference " << ranks << " ranks / 1 rank (" << name << "): soil " << s << ", grid " << g
+            << ", monitors " << m << "\n";
+  EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
+  return p;
+}
+
+TEST(Mpirun, MpmFemOnTwoRanksFollowsTheOneRankRun2D) {
+  // The soil's points over the ranks; the fluid's system assembled by each rank on the cells of
+  // its node planes and solved by MUMPS's LU and PETSc's BiCGSTAB (one rank: UMFPACK's and
+  // Eigen's): the same answers to the Krylov tolerance.
+  const Pair p = expect_mpm_fem_follows(mpm_fem_block(2), "mpirun-mpmfem-2d", 2, 0.02, 1e-6, 1e-6, 1e-6, 1e-6);
   long grids = 0;
   for (const auto& e : scene::read_pvd(p.many + "/output/results.pvd")) grids += e.group == "grid";
   EXPECT_EQ(grids, 5);
   const auto rj = load_json(p.many + "/run.json");
-  EXPECT_EQ(rj["status"], "completed");
   EXPECT_GT(rj["counters"]["particles migrated"].get<double>(), 50.0);  // 90 (2026-12-06)
+  EXPECT_GT(rj["counters"]["fluid factorisations"].get<double>(), 1.0);
+  EXPECT_GT(rj["counters"]["fluid Krylov iterations per step"].get<double>(), 0.5);  // the factor was reused
 }
 
-TEST(Mpirun, MpmFemOnTwoRanksIsBitwiseTheOneRankRun3D) {
+TEST(Mpirun, MpmFemOnTwoRanksFollowsTheOneRankRun3D) {
   nlohmann::json s = mpm_fem_block(3);
   s["grid"]["cell_size"] = 0.03;  // 3D fluid systems are costly: a coarse grid, a short run
-  s["grid"]["max"] = {0.51, 0.12, 0.06};
+  // The water's surface (y = 0.1 m) two cells below the open top: with the top at 0.12 m the
+  // water reached the open face, whose backflow term switches with the sign of the outflow, and
+  // one rank's own runs with a direct solve every step and with the reused factor differed by
+  // three times the largest pressure at t = 0.03 s.
+  s["grid"]["max"] = {0.51, 0.18, 0.06};
   s["time"]["end"] = 0.03;
-  const Pair p = solve_both(s, "mpirun-mpmfem-3d", 2);
-  expect_same_answers(p);
-  EXPECT_EQ(load_json(p.many + "/run.json")["status"], "completed");
+  // Measured 2026-12-06: soil 3.5e-7, grid 3.5e-5 (the pressure in the air below the top), the
+  // air's velocity at the open top 8.0e-4. One rank's own runs with a direct solve every step and
+  // with the reused factor differ by 5.3e-7 (soil), 4.9e-6 (pressure) and 8.6e-5 (the air's
+  // velocity at the open top).
+  expect_mpm_fem_follows(s, "mpirun-mpmfem-3d", 2, 0.03, 1e-5, 1e-3, 1e-2, 1e-5);
 }
 
-TEST(Mpirun, MpmFemCheckpointOfTwoRanksResumesOnOneAndOnThreeBitForBit) {
+TEST(Mpirun, MpmFemCheckpointOfTwoRanksResumesOnOneAndOnThree) {
   // The fluid's state is the same on every rank (global restart arrays); the resumed runs
-  // factorise afresh, as the saving run does after a checkpoint.
+  // factorise afresh, as the saving run does after a checkpoint. Two ranks and three solve the
+  // fluid with MUMPS, one with UMFPACK.
   nlohmann::json s = mpm_fem_block(2);
   s["time"]["dt"] = 2.5e-4;
   s["output"]["checkpoint_interval"] = 0.04;
   const auto [dir, one, run] = restart_runs(s, "mpirun-mpmfem-restart");
   const auto reference = last_frame(one, "solid"), grid = last_frame(one, "grid");
-  const std::string monitors = read_text(one + "/monitors.csv");
   resume_on_one_and_three(run, dir, 160, [&](int ranks, const nlohmann::json&) {
-    EXPECT_EQ(differing_values(reference, last_frame(run, "solid")), 0) << ranks << " ranks";
-    const auto g = last_frame(run, "grid");
-    ASSERT_EQ(g.arrays.size(), grid.arrays.size());
-    for (std::size_t j = 0; j < g.arrays.size(); ++j) EXPECT_EQ(g.arrays[j].values, grid.arrays[j].values) << ranks << ": " << g.arrays[j].name;
-    EXPECT_EQ(read_text(run + "/monitors.csv"), monitors) << ranks << " ranks";
+    std::string where;
+    const double soil = largest_relative_difference(reference, last_frame(run, "solid"), 0.02, where);
+    EXPECT_LE(soil, 1e-6) << ranks << " ranks: " << where;
+    const double g = expect_close_grid(grid, last_frame(run, "grid"), 1e-6, 1e-6, std::to_string(ranks) + " ranks");
+    const double m = expect_close_monitors(one + "/monitors.csv", run + "/monitors.csv", 1e-6);
+    std::cout << "resumed on " << ranks << ": soil " << soil << ", grid " << g << ", monitors " << m << "\n";
   });
 }
 

@@ -1,0 +1,133 @@
+#include "solver/parallel/reused_lu.hpp"
+
+#include <petscksp.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "solver/parallel/comm.hpp"
+
+namespace swmpm::parallel {
+
+namespace {
+void petsc(PetscErrorCode code) {
+  if (code != 0) throw std::runtime_error("PETSc error " + std::to_string(static_cast<int>(code)) + " (see above)");
+}
+}  // namespace
+
+// Two solvers share one preconditioner: the LU itself (PCLU with MUMPS), applied alone for a
+// direct solve right after a factorisation, and BiCGSTAB around it while the factor is reused.
+struct ReusedLU::Impl {
+  ::Mat A = nullptr;
+  ::Vec x = nullptr, b = nullptr, x_all = nullptr;
+  VecScatter to_all = nullptr;
+  PC lu = nullptr;
+  KSP krylov = nullptr;
+  void reset() {
+    KSPDestroy(&krylov);
+    PCDestroy(&lu);
+    VecScatterDestroy(&to_all);
+    VecDestroy(&x_all);
+    VecDestroy(&x);
+    VecDestroy(&b);
+    MatDestroy(&A);
+  }
+  ~Impl() { reset(); }
+};
+
+ReusedLU::ReusedLU() : impl_(std::make_unique<Impl>()) {}
+ReusedLU::~ReusedLU() = default;
+
+void ReusedLU::set_pattern(long n, long N, const std::vector<long>& rows, const std::vector<long>& cols,
+                           const std::vector<long>& b_rows) {
+  Impl& m = *impl_;
+  m.reset();
+  petsc(MatCreate(PETSC_COMM_WORLD, &m.A));
+  petsc(MatSetSizes(m.A, static_cast<PetscInt>(n), static_cast<PetscInt>(n), static_cast<PetscInt>(N), static_cast<PetscInt>(N)));
+  petsc(MatSetType(m.A, MATAIJ));
+  // PETSc may rewrite the coordinates it is given: copies.
+  std::vector<PetscInt> ri(rows.begin(), rows.end()), ci(cols.begin(), cols.end()), bi(b_rows.begin(), b_rows.end());
+  petsc(MatSetPreallocationCOO(m.A, static_cast<PetscCount>(ri.size()), ri.data(), ci.data()));
+  petsc(MatCreateVecs(m.A, &m.x, &m.b));
+  petsc(VecZeroEntries(m.x));
+  petsc(VecSetPreallocationCOO(m.b, static_cast<PetscCount>(bi.size()), bi.data()));
+  petsc(VecScatterCreateToAll(m.x, &m.to_all, &m.x_all));
+
+  petsc(PCCreate(PETSC_COMM_WORLD, &m.lu));
+  petsc(PCSetOperators(m.lu, m.A, m.A));
+  petsc(PCSetType(m.lu, PCLU));
+  petsc(PCFactorSetMatSolverType(m.lu, MATSOLVERMUMPS));
+  petsc(PCSetOptionsPrefix(m.lu, "fluid_"));  // PETSC_OPTIONS may tune MUMPS: -fluid_mat_mumps_icntl_14 50
+  petsc(PCSetFromOptions(m.lu));
+
+  petsc(KSPCreate(PETSC_COMM_WORLD, &m.krylov));
+  petsc(KSPSetPC(m.krylov, m.lu));
+  petsc(KSPSetOperators(m.krylov, m.A, m.A));
+  petsc(KSPSetType(m.krylov, KSPBCGS));
+  // As Eigen's BiCGSTAB at one rank: the factor on the right, the test on the true residual, the
+  // last solution as the start.
+  petsc(KSPSetPCSide(m.krylov, PC_RIGHT));
+  petsc(KSPSetNormType(m.krylov, KSP_NORM_UNPRECONDITIONED));
+  petsc(KSPSetInitialGuessNonzero(m.krylov, PETSC_TRUE));
+  petsc(KSPSetReusePreconditioner(m.krylov, PETSC_TRUE));
+}
+
+ReusedLU::Stats ReusedLU::solve(const std::vector<double>& values, const std::vector<double>& b_values, bool factorise,
+                                double rtol, int max_iterations, std::vector<double>& x) {
+  Impl& m = *impl_;
+  Stats s;
+  petsc(MatSetValuesCOO(m.A, values.data(), INSERT_VALUES));
+  petsc(VecSetValuesCOO(m.b, b_values.data(), INSERT_VALUES));
+  double t0 = wall_time();
+  if (factorise) {
+    // A fresh numeric factorisation of the new values (the symbolic one is the pattern's), then
+    // x = A^-1 b by the factor alone.
+    ++factorisations_;
+    petsc(PCSetReusePreconditioner(m.lu, PETSC_FALSE));
+    petsc(PCSetUp(m.lu));
+    PCFailedReason failed = PC_NOERROR;
+    petsc(PCGetFailedReason(m.lu, &failed));
+    petsc(PCSetReusePreconditioner(m.lu, PETSC_TRUE));
+    const double t1 = wall_time();
+    s.seconds_factorise = t1 - t0;
+    t0 = t1;
+    if (any(failed != PC_NOERROR)) {
+      s.seconds_solve = wall_time() - t0;
+      return s;
+    }
+    petsc(PCApply(m.lu, m.b, m.x));
+    s.ok = true;
+  } else {
+    petsc(KSPSetTolerances(m.krylov, rtol, 0.0, PETSC_DEFAULT, max_iterations));
+    petsc(KSPSolve(m.krylov, m.b, m.x));
+    PetscInt its = 0;
+    KSPConvergedReason reason;
+    petsc(KSPGetIterationNumber(m.krylov, &its));
+    petsc(KSPGetConvergedReason(m.krylov, &reason));
+    s.iterations = static_cast<int>(its);
+    s.ok = reason > 0;
+  }
+  // Every rank takes the whole solution (the fluid's state is whole on every rank).
+  const double t2 = wall_time();
+  petsc(VecScatterBegin(m.to_all, m.x, m.x_all, INSERT_VALUES, SCATTER_FORWARD));
+  petsc(VecScatterEnd(m.to_all, m.x, m.x_all, INSERT_VALUES, SCATTER_FORWARD));
+  PetscInt size = 0;
+  petsc(VecGetSize(m.x_all, &size));
+  x.resize(static_cast<std::size_t>(size));
+  const PetscScalar* a = nullptr;
+  petsc(VecGetArrayRead(m.x_all, &a));
+  bool finite = true;
+  for (PetscInt k = 0; k < size; ++k) {
+    x[static_cast<std::size_t>(k)] = a[k];
+    finite = finite && std::isfinite(a[k]);
+  }
+  petsc(VecRestoreArrayRead(m.x_all, &a));
+  add_communication_seconds(wall_time() - t2, Traffic::exchange);
+  s.ok = s.ok && finite;
+  s.seconds_solve = wall_time() - t0;
+  if (!s.ok && !factorise) petsc(VecZeroEntries(m.x));  // a failed Krylov solve's x is no start for the next
+  return s;
+}
+
+}  // namespace swmpm::parallel
