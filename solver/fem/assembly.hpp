@@ -12,12 +12,16 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "solver/grid/grid.hpp"
 #include "solver/linear/stencil.hpp"
+#include "solver/parallel/comm.hpp"
+#include "solver/parallel/sparse_solve.hpp"
 
 namespace swmpm::fem {
 
@@ -109,6 +113,13 @@ class NodeSystem {
     std::fill_n(A.valuePtr(), A.nonZeros(), 0.0);
     rhs.setZero();
   }
+  /// Only the unknowns (columns and right-hand-side rows) [lo, hi): over ranks, those a rank's
+  /// cells reach (RankShare::unknowns); the others it never writes.
+  void clear(long lo, long hi) {
+    const int* outer = A.outerIndexPtr();
+    std::fill(A.valuePtr() + outer[lo], A.valuePtr() + outer[hi], 0.0);
+    rhs.segment(lo, hi - lo).setZero();
+  }
 
   /// Unknown r = I B + a is prescribed (value v): its row and column are replaced by the identity
   /// times `scale`, the column's products with v moved to the right-hand side.
@@ -122,16 +133,17 @@ class NodeSystem {
   /// Applies the prescribed unknowns to the assembled A and rhs (after assembly, before the solve).
   /// Over ranks, each rank's A and rhs are its cells' part of the sums: the products moved to the
   /// right-hand side add up, and only the owner of a prescribed row, an unknown in [own_lo, own_hi),
-  /// puts its identity and value.
-  void apply_fixed(double scale, long own_lo = 0, long own_hi = -1) {
+  /// puts its identity and value. Only the columns and rows [lo, hi) are visited (the unknowns a
+  /// rank's cells reach).
+  void apply_fixed(double scale, long own_lo = 0, long own_hi = -1, long lo = 0, long hi = -1) {
     if (own_hi < 0) own_hi = A.cols();
+    if (hi < 0) hi = A.cols();
     auto own = [&](long r) { return r >= own_lo && r < own_hi; };
-    const int n = static_cast<int>(A.cols());
     const int* outer = A.outerIndexPtr();
     const int* inner = A.innerIndexPtr();
     double* val = A.valuePtr();
     // Columns: move the known values to the right-hand side, then zero them.
-    for (int col = 0; col < n; ++col) {
+    for (long col = lo; col < hi; ++col) {
       if (!fixed_[col]) continue;
       const double v = fixed_value_[col];
       for (int e = outer[col]; e < outer[col + 1]; ++e) {
@@ -140,12 +152,12 @@ class NodeSystem {
       }
     }
     // Rows of fixed unknowns in free columns.
-    for (int col = 0; col < n; ++col) {
+    for (long col = lo; col < hi; ++col) {
       if (fixed_[col]) continue;
       for (int e = outer[col]; e < outer[col + 1]; ++e)
         if (fixed_[inner[e]]) val[e] = 0.0;
     }
-    for (int r = 0; r < n; ++r)
+    for (long r = lo; r < hi; ++r)
       if (fixed_[r]) rhs[r] = own(r) ? scale * fixed_value_[r] : 0.0;
   }
 
@@ -157,6 +169,65 @@ class NodeSystem {
   linear::StencilPattern<Dim, R, B> pattern_;
   std::vector<std::uint8_t> fixed_;
   std::vector<double> fixed_value_;
+};
+
+/// This rank's share of a NodeSystem over mpirun's ranks (fem/fluid.hpp and fem/phase_field.hpp
+/// assemble and solve their systems so). Rank r of R owns the nodes of node planes
+/// [P r / R, P (r + 1) / R) along the grid's last axis (P planes; the node order has that axis
+/// slowest, so its rows are one range, numbered as one rank numbers them) and assembles the cells
+/// whose first plane is its own; its cells reach S - 1 planes into the next rank's rows. It hands
+/// PETSc every entry of A among the rows its cells touch (in the pattern's order; an entry none
+/// of its cells adds is an explicit zero) and the right-hand side of those rows; PETSc adds the
+/// ranks' parts. One rank: every cell and node, nothing handed.
+template <int Dim, int S, int B>
+class RankShare {
+ public:
+  std::array<int, Dim> cell_lo{}, cell_hi{};  // the cells assembled here (inclusive)
+  std::size_t own_lo = 0, own_hi = 0;         // the nodes whose rows are owned here
+  bool over_ranks = false;
+  bool owns(std::size_t node) const { return node >= own_lo && node < own_hi; }
+  /// The unknowns [first, second) this rank's cells reach (one rank: all).
+  std::pair<long, long> unknowns() const { return {rhs_lo_, rhs_hi_}; }
+
+  /// The share of grid g's system A (its pattern built); over ranks, A's pattern in `solver` too.
+  void build(const Grid<Dim>& g, const linear::CscMatrix& A, parallel::SparseSolve& solver) {
+    const std::size_t nn = g.num_nodes();
+    for (int a = 0; a < Dim; ++a) cell_lo[a] = 0, cell_hi[a] = g.axis(a).cells - 1;
+    own_lo = 0, own_hi = nn;
+    rhs_lo_ = 0, rhs_hi_ = static_cast<long>(nn) * B;
+    over_ranks = parallel::distributed();
+    if (!over_ranks) return;
+    constexpr int last = Dim - 1;
+    const long P = g.nodes_per_axis()[last], across = static_cast<long>(nn) / P;
+    const long ranks = parallel::ranks(), r = parallel::rank();
+    const long p_lo = P * r / ranks, p_hi = P * (r + 1) / ranks;
+    cell_lo[last] = static_cast<int>(p_lo);
+    cell_hi[last] = static_cast<int>(std::min<long>(p_hi, g.axis(last).cells)) - 1;  // none when above the last cell
+    own_lo = static_cast<std::size_t>(p_lo * across), own_hi = static_cast<std::size_t>(p_hi * across);
+    rhs_lo_ = p_lo * across * B, rhs_hi_ = std::min(P, p_hi + S - 1) * across * B;
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    std::vector<long> rows, cols, b_rows;
+    pos_.clear();
+    for (long col = rhs_lo_; col < rhs_hi_; ++col)
+      for (int e = outer[col]; e < outer[col + 1]; ++e)
+        if (inner[e] >= rhs_lo_ && inner[e] < rhs_hi_) pos_.push_back(e), rows.push_back(inner[e]), cols.push_back(col);
+    for (long row = rhs_lo_; row < rhs_hi_; ++row) b_rows.push_back(row);
+    solver.set_pattern(static_cast<long>(own_lo) * B, static_cast<long>(own_hi - own_lo) * B, static_cast<long>(nn) * B, rows,
+                       cols, b_rows);
+  }
+
+  /// This rank's values of A and rhs as set_pattern named them.
+  void values(const linear::CscMatrix& A, const Eigen::VectorXd& rhs, std::vector<double>& a, std::vector<double>& b) const {
+    a.resize(pos_.size());
+    const double* val = A.valuePtr();
+    for (std::size_t k = 0; k < pos_.size(); ++k) a[k] = val[pos_[k]];
+    b.assign(rhs.data() + rhs_lo_, rhs.data() + rhs_hi_);
+  }
+
+ private:
+  std::vector<int> pos_;  // the value index in A of each entry handed to PETSc
+  long rhs_lo_ = 0, rhs_hi_ = 0;  // the rows handed to PETSc
 };
 
 }  // namespace swmpm::fem

@@ -28,10 +28,10 @@
 // (Adams–Bashforth). The system (eqs. 67-68) is linear in (v^{L+1}, p^{L+1}): assembled into a
 // fixed pattern (assembly.hpp) and solved by UMFPACK (linear/factorisation.hpp).
 //
-// Over mpirun's ranks (partition()): rank r owns the nodes of an equal share of the grid's node
-// planes along its last axis and assembles the cells starting in them; the system is solved by
-// MUMPS's distributed LU under the same reuse rule (parallel/reused_lu.hpp), and every rank takes
-// the whole solution (the state v, p, phi stays whole on every rank).
+// Over mpirun's ranks (assembly.hpp's RankShare): rank r owns the nodes of an equal share of the
+// grid's node planes along its last axis and assembles the cells starting in them; the system is
+// solved by MUMPS's distributed LU under the same reuse rule (parallel/sparse_solve.hpp), and
+// every rank takes the whole solution (the state v, p, phi stays whole on every rank).
 //
 // Beyond the seed (each measured in docs/formulations.md, "mpm-fem"):
 // - the viscous term int n mu grad w : grad v (Laplacian form, theta = 1/2); the seed's weak form
@@ -57,8 +57,6 @@
 #include "solver/fem/cell_basis.hpp"
 #include "solver/grid/grid.hpp"
 #include "solver/linear/factorisation.hpp"
-#include "solver/parallel/comm.hpp"
-#include "solver/parallel/reused_lu.hpp"
 
 namespace swmpm::fem {
 
@@ -146,8 +144,8 @@ class Fluid {
         if (bcs_.fixed[i] >> a & 1) sys_.fix(static_cast<long>(i) * B + a, a == Dim ? bcs_.p_value[i] : 0.0);
     x_.setZero(sys_.A.rows());
     refactorise_ = true;  // a new pattern: no factor of it yet
-    partition();
-    if (!over_ranks_) lu_.analyse(sys_.A);
+    share_.build(g, sys_.A, ranks_lu_);
+    if (!share_.over_ranks) lu_.analyse(sys_.A);
   }
 
   /// One step (the seed's algorithm step iii, eqs. 67-68): v^{L+1}, p^{L+1} from v^L, v^{L-1},
@@ -166,7 +164,7 @@ class Fluid {
   }
 
   /// Solve statistics (run.json counters, bench/).
-  long factorisations() const { return over_ranks_ ? ranks_lu_.factorisations() : lu_.factorisations(); }
+  long factorisations() const { return share_.over_ranks ? ranks_lu_.factorisations() : lu_.factorisations(); }
   long krylov_iterations = 0, solves = 0;
   /// The next solve factorises afresh (a checkpoint was taken or restored: a resumed run and the
   /// run that saved then continue with the same factor).
@@ -252,12 +250,13 @@ class Fluid {
  private:
   void assemble(const SoilOnGrid<Dim>& soil, const Vec<Dim>& b, double dt) {
     const double t0 = omp_get_wtime();
-    sys_.clear();
+    const auto [first, last] = share_.unknowns();
+    sys_.clear(first, last);
     const double h = grid_->h();
     const int threads = omp_get_max_threads();
     if (static_cast<int>(local_.size()) < threads) local_.resize(threads);
     double* rhs = sys_.rhs.data();
-    for_each_cell_coloured<Dim, Shape::support>(cell_lo_, cell_hi_, [&](const std::array<int, Dim>& cell) {
+    for_each_cell_coloured<Dim, Shape::support>(share_.cell_lo, share_.cell_hi, [&](const std::array<int, Dim>& cell) {
       Local& L = local_[omp_get_thread_num()];
       basis_.eval(cell, L.c);
       // Per Gauss point g (a column) and function k (a row), the factors of every term, so that each
@@ -392,19 +391,18 @@ class Fluid {
     // through the open top behind a falling water jet ran away to 255 m/s in 0.035 s); the term
     // -int rho n {vbar.n}_- w.v^{L+1} dGamma takes it out again and vanishes on outflow.
     // Node terms: the owner of the node's rows adds them.
-    auto own = [&](std::size_t i) { return i >= own_lo_ && i < own_hi_; };
     for (const auto& o : bcs_.open) {
       const std::size_t i = o.node;
-      if (!own(i)) continue;
+      if (!share_.owns(i)) continue;
       const double un = o.sign * (1.5 * v[i][o.axis] - 0.5 * v_old[i][o.axis]);
       if (!(un < 0.0)) continue;
       const double rho = props_.rho_a + std::clamp(phi[i], 0.0, 1.0) * (props_.rho_w - props_.rho_a);
       for (int a = 0; a < Dim; ++a) sys_.add_diagonal(i, a, soil.n[i] * rho * (-un) * o.area);
     }
     for (std::size_t i = 0; i < bcs_.face_load.size(); ++i)
-      if (own(i) && bcs_.face_load[i].squaredNorm() > 0.0)
+      if (share_.owns(i) && bcs_.face_load[i].squaredNorm() > 0.0)
         for (int a = 0; a < Dim; ++a) rhs[static_cast<long>(i) * B + a] += soil.n[i] * bcs_.face_load[i][a];
-    sys_.apply_fixed(1.0, static_cast<long>(own_lo_) * B, static_cast<long>(own_hi_) * B);
+    sys_.apply_fixed(1.0, static_cast<long>(share_.own_lo) * B, static_cast<long>(share_.own_hi) * B, first, last);
     seconds_assemble += omp_get_wtime() - t0;
   }
 
@@ -439,7 +437,7 @@ class Fluid {
   static constexpr double kTolerance = 1e-8;  // relative residual of the Krylov solve
 
   bool solve() {
-    if (over_ranks_) return solve_over_ranks();
+    if (share_.over_ranks) return solve_over_ranks();
     ++solves;
     double t0 = omp_get_wtime();
     if (lu_.factorisations() > 0 && !refactorise_ && last_iterations_ < kRefactoriseAfter) {
@@ -468,47 +466,10 @@ class Fluid {
     return ok && x_.allFinite();
   }
 
-  /// The cells this rank assembles, the nodes whose rows it owns (flat indices [own_lo_, own_hi_)),
-  /// and over ranks the system's coordinates. One rank: every cell and node. Over ranks: rank r of
-  /// R owns node planes [P r / R, P (r + 1) / R) along the last axis (P planes; the node order has
-  /// that axis slowest, so its rows are one range, numbered as one rank numbers them) and assembles
-  /// the cells whose first plane is its own; its cells reach S - 1 planes into the next rank's
-  /// rows. It hands PETSc every entry of A among the rows its cells touch (in the pattern's
-  /// order; an entry no cell of its adds is an explicit zero) and the right-hand side of those
-  /// rows; PETSc adds each rank's part.
-  void partition() {
-    const std::size_t nn = v.size();
-    for (int a = 0; a < Dim; ++a) cell_lo_[a] = 0, cell_hi_[a] = grid_->axis(a).cells - 1;
-    own_lo_ = 0, own_hi_ = nn;
-    over_ranks_ = parallel::distributed();
-    if (!over_ranks_) return;
-    constexpr int last = Dim - 1;
-    const long P = grid_->nodes_per_axis()[last], across = static_cast<long>(nn) / P;
-    const long ranks = parallel::ranks(), r = parallel::rank();
-    const long p_lo = P * r / ranks, p_hi = P * (r + 1) / ranks;
-    cell_lo_[last] = static_cast<int>(p_lo);
-    cell_hi_[last] = static_cast<int>(std::min<long>(p_hi, grid_->axis(last).cells)) - 1;  // none when above the last cell
-    own_lo_ = static_cast<std::size_t>(p_lo * across), own_hi_ = static_cast<std::size_t>(p_hi * across);
-    const long row_lo = p_lo * across * B, row_hi = std::min(P, p_hi + Shape::support - 1) * across * B;
-    const int* outer = sys_.A.outerIndexPtr();
-    const int* inner = sys_.A.innerIndexPtr();
-    std::vector<long> rows, cols, b_rows;
-    coo_pos_.clear();
-    for (long col = row_lo; col < row_hi; ++col)
-      for (int e = outer[col]; e < outer[col + 1]; ++e)
-        if (inner[e] >= row_lo && inner[e] < row_hi) coo_pos_.push_back(e), rows.push_back(inner[e]), cols.push_back(col);
-    for (long row = row_lo; row < row_hi; ++row) b_rows.push_back(row);
-    rhs_lo_ = row_lo, rhs_hi_ = row_hi;
-    ranks_lu_.set_pattern((p_hi - p_lo) * across * B, static_cast<long>(nn) * B, rows, cols, b_rows);
-  }
-
   /// solve() over the ranks: the same rule, with MUMPS's factor and PETSc's BiCGSTAB.
   bool solve_over_ranks() {
     ++solves;
-    values_.resize(coo_pos_.size());
-    const double* val = sys_.A.valuePtr();
-    for (std::size_t k = 0; k < coo_pos_.size(); ++k) values_[k] = val[coo_pos_[k]];
-    b_values_.assign(sys_.rhs.data() + rhs_lo_, sys_.rhs.data() + rhs_hi_);
+    share_.values(sys_.A, sys_.rhs, values_, b_values_);
     if (ranks_lu_.factorisations() > 0 && !refactorise_ && last_iterations_ < kRefactoriseAfter) {
       const auto s = ranks_lu_.solve(values_, b_values_, false, kTolerance, kMaxReuseIterations, x_all_);
       krylov_iterations += s.iterations;
@@ -560,13 +521,8 @@ class Fluid {
   std::vector<Local> local_;
   mutable bool refactorise_ = false;
   int last_iterations_ = 0;
-  // partition(): one rank's whole grid, or this rank's share over mpirun's ranks
-  std::array<int, Dim> cell_lo_{}, cell_hi_{};
-  std::size_t own_lo_ = 0, own_hi_ = 0;
-  bool over_ranks_ = false;
-  parallel::ReusedLU ranks_lu_;
-  std::vector<int> coo_pos_;  // the value index in A of each entry handed to PETSc
-  long rhs_lo_ = 0, rhs_hi_ = 0;  // the right-hand-side rows handed to PETSc
+  RankShare<Dim, Shape::support, B> share_;  // one rank's whole grid, or this rank's share over ranks
+  parallel::SparseSolve ranks_lu_{parallel::SparseSolve::Preconditioner::lu};
   std::vector<double> values_, b_values_, x_all_;
 };
 

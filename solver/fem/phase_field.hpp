@@ -26,6 +26,10 @@
 // advected by the intrinsic velocity, phi conserves int n phi only as far as the discrete
 // mixture continuity matches the moving porosity, and a column collapsing into water lost 12.7 %
 // when each step only restored its own start.
+//
+// Over mpirun's ranks each rank assembles the cells of its node planes (assembly.hpp's RankShare)
+// and PETSc's BiCGSTAB with the diagonal solves the system (parallel/sparse_solve.hpp); every rank
+// takes the whole phi, and the volume correction runs whole on every rank.
 #pragma once
 
 #include <Eigen/IterativeLinearSolvers>
@@ -63,6 +67,7 @@ class PhaseField {
     prm_ = prm;
     sys_.build(g);
     x_.setZero(sys_.A.rows());
+    share_.build(g, sys_.A, ranks_solve_);
   }
 
   /// phi^{L+1} from phi^L (in place) with the fluid's nodal velocity v and the nodal porosity n
@@ -73,15 +78,25 @@ class PhaseField {
            double target = -1.0) {
     const double V0 = target >= 0.0 ? target : volume(phi, n);
     assemble(phi, v, dt);
-    Eigen::BiCGSTAB<linear::CscMatrix, Eigen::DiagonalPreconditioner<double>> solver;
-    solver.setTolerance(1e-10);
-    solver.setMaxIterations(500);
-    solver.compute(sys_.A);
-    x_ = solver.solveWithGuess(sys_.rhs, Eigen::Map<const Eigen::VectorXd>(phi.data(), static_cast<long>(phi.size())));
-    if (solver.info() != Eigen::Success) return -1;
-    for (std::size_t i = 0; i < phi.size(); ++i) phi[i] = x_[static_cast<long>(i)];
+    int iterations = 0;
+    if (share_.over_ranks) {  // this rank's cells assembled: PETSc's BiCGSTAB with the diagonal (sparse_solve.hpp)
+      share_.values(sys_.A, sys_.rhs, values_, b_values_);
+      const auto s = ranks_solve_.solve(values_, b_values_, false, kTolerance, kMaxIterations, x_all_, phi.data());
+      if (!s.ok) return -1;
+      phi = x_all_;
+      iterations = s.iterations;
+    } else {
+      Eigen::BiCGSTAB<linear::CscMatrix, Eigen::DiagonalPreconditioner<double>> solver;
+      solver.setTolerance(kTolerance);
+      solver.setMaxIterations(kMaxIterations);
+      solver.compute(sys_.A);
+      x_ = solver.solveWithGuess(sys_.rhs, Eigen::Map<const Eigen::VectorXd>(phi.data(), static_cast<long>(phi.size())));
+      if (solver.info() != Eigen::Success) return -1;
+      for (std::size_t i = 0; i < phi.size(); ++i) phi[i] = x_[static_cast<long>(i)];
+      iterations = static_cast<int>(solver.iterations());
+    }
     if (prm_.volume_correction) correct_volume(phi, n, V0);
-    return static_cast<int>(solver.iterations());
+    return iterations;
   }
 
   /// int n phi dOmega (m^Dim): the water's volume (n = 1 outside soil).
@@ -140,13 +155,12 @@ class PhaseField {
   }
 
   void assemble(const std::vector<double>& phi, const std::vector<Vec<Dim>>& v, double dt) {
-    sys_.clear();
+    const auto [first, last] = share_.unknowns();
+    sys_.clear(first, last);
     const double h = grid_->h(), M = prm_.mobility, Ma2 = M * prm_.a2(), react = 4.0 * M;  // W = 1
-    std::array<int, Dim> cells;
-    for (int a = 0; a < Dim; ++a) cells[a] = grid_->axis(a).cells;
     const int threads = omp_get_max_threads();
     if (static_cast<int>(local_.size()) < threads) local_.resize(threads);
-    for_each_cell_coloured<Dim, Shape::support>(cells, [&](const std::array<int, Dim>& cell) {
+    for_each_cell_coloured<Dim, Shape::support>(share_.cell_lo, share_.cell_hi, [&](const std::array<int, Dim>& cell) {
       Local& L = local_[omp_get_thread_num()];
       basis_->eval(cell, L.c);
       std::fill(&L.Ae[0][0], &L.Ae[0][0] + K * K, 0.0);
@@ -191,10 +205,16 @@ class PhaseField {
     double fe[K];
   };
 
+  static constexpr double kTolerance = 1e-10;  // BiCGSTAB's relative residual
+  static constexpr int kMaxIterations = 500;
+
   const Grid<Dim>* grid_ = nullptr;
   const Basis* basis_ = nullptr;
   PhaseFieldParameters prm_;
   System sys_;
+  RankShare<Dim, Shape::support, 1> share_;  // one rank's whole grid, or this rank's share over ranks
+  parallel::SparseSolve ranks_solve_{parallel::SparseSolve::Preconditioner::jacobi};
+  std::vector<double> values_, b_values_, x_all_;
   Eigen::VectorXd x_;
   std::vector<Local> local_;
   std::vector<double> weight_;

@@ -1,4 +1,4 @@
-#include "solver/parallel/reused_lu.hpp"
+#include "solver/parallel/sparse_solve.hpp"
 
 #include <petscksp.h>
 
@@ -16,17 +16,17 @@ void petsc(PetscErrorCode code) {
 }
 }  // namespace
 
-// Two solvers share one preconditioner: the LU itself (PCLU with MUMPS), applied alone for a
-// direct solve right after a factorisation, and BiCGSTAB around it while the factor is reused.
-struct ReusedLU::Impl {
+// BiCGSTAB and its preconditioner; for an LU, the preconditioner alone is a direct solve right
+// after a factorisation.
+struct SparseSolve::Impl {
   ::Mat A = nullptr;
   ::Vec x = nullptr, b = nullptr, x_all = nullptr;
   VecScatter to_all = nullptr;
-  PC lu = nullptr;
+  PC pc = nullptr;
   KSP krylov = nullptr;
   void reset() {
     KSPDestroy(&krylov);
-    PCDestroy(&lu);
+    PCDestroy(&pc);
     VecScatterDestroy(&to_all);
     VecDestroy(&x_all);
     VecDestroy(&x);
@@ -36,13 +36,14 @@ struct ReusedLU::Impl {
   ~Impl() { reset(); }
 };
 
-ReusedLU::ReusedLU() : impl_(std::make_unique<Impl>()) {}
-ReusedLU::~ReusedLU() = default;
+SparseSolve::SparseSolve(Preconditioner p) : impl_(std::make_unique<Impl>()), kind_(p) {}
+SparseSolve::~SparseSolve() = default;
 
-void ReusedLU::set_pattern(long n, long N, const std::vector<long>& rows, const std::vector<long>& cols,
-                           const std::vector<long>& b_rows) {
+void SparseSolve::set_pattern(long first, long n, long N, const std::vector<long>& rows, const std::vector<long>& cols,
+                              const std::vector<long>& b_rows) {
   Impl& m = *impl_;
   m.reset();
+  first_ = first, n_ = n;
   petsc(MatCreate(PETSC_COMM_WORLD, &m.A));
   petsc(MatSetSizes(m.A, static_cast<PetscInt>(n), static_cast<PetscInt>(n), static_cast<PetscInt>(N), static_cast<PetscInt>(N)));
   petsc(MatSetType(m.A, MATAIJ));
@@ -54,29 +55,37 @@ void ReusedLU::set_pattern(long n, long N, const std::vector<long>& rows, const 
   petsc(VecSetPreallocationCOO(m.b, static_cast<PetscCount>(bi.size()), bi.data()));
   petsc(VecScatterCreateToAll(m.x, &m.to_all, &m.x_all));
 
-  petsc(PCCreate(PETSC_COMM_WORLD, &m.lu));
-  petsc(PCSetOperators(m.lu, m.A, m.A));
-  petsc(PCSetType(m.lu, PCLU));
-  petsc(PCFactorSetMatSolverType(m.lu, MATSOLVERMUMPS));
-  petsc(PCSetOptionsPrefix(m.lu, "fluid_"));  // PETSC_OPTIONS may tune MUMPS: -fluid_mat_mumps_icntl_14 50
-  petsc(PCSetFromOptions(m.lu));
+  petsc(PCCreate(PETSC_COMM_WORLD, &m.pc));
+  petsc(PCSetOperators(m.pc, m.A, m.A));
+  if (kind_ == Preconditioner::lu) {
+    petsc(PCSetType(m.pc, PCLU));
+    petsc(PCFactorSetMatSolverType(m.pc, MATSOLVERMUMPS));
+    petsc(PCSetOptionsPrefix(m.pc, "fluid_"));  // PETSC_OPTIONS may tune MUMPS: -fluid_mat_mumps_icntl_14 50
+  } else {
+    petsc(PCSetType(m.pc, PCJACOBI));
+    petsc(PCSetOptionsPrefix(m.pc, "phase_"));
+  }
+  petsc(PCSetFromOptions(m.pc));
 
   petsc(KSPCreate(PETSC_COMM_WORLD, &m.krylov));
-  petsc(KSPSetPC(m.krylov, m.lu));
+  petsc(KSPSetPC(m.krylov, m.pc));
   petsc(KSPSetOperators(m.krylov, m.A, m.A));
   petsc(KSPSetType(m.krylov, KSPBCGS));
-  // As Eigen's BiCGSTAB at one rank: the factor on the right, the test on the true residual, the
-  // last solution as the start.
+  // As Eigen's BiCGSTAB at one rank: the preconditioner on the right, the test on the true
+  // residual, the last solution (or the caller's guess) as the start. An LU is reused until the
+  // caller factorises; the diagonal is taken again each solve.
   petsc(KSPSetPCSide(m.krylov, PC_RIGHT));
   petsc(KSPSetNormType(m.krylov, KSP_NORM_UNPRECONDITIONED));
   petsc(KSPSetInitialGuessNonzero(m.krylov, PETSC_TRUE));
-  petsc(KSPSetReusePreconditioner(m.krylov, PETSC_TRUE));
+  petsc(KSPSetReusePreconditioner(m.krylov, kind_ == Preconditioner::lu ? PETSC_TRUE : PETSC_FALSE));
 }
 
-ReusedLU::Stats ReusedLU::solve(const std::vector<double>& values, const std::vector<double>& b_values, bool factorise,
-                                double rtol, int max_iterations, std::vector<double>& x) {
+SparseSolve::Stats SparseSolve::solve(const std::vector<double>& values, const std::vector<double>& b_values,
+                                      bool factorise, double rtol, int max_iterations, std::vector<double>& x,
+                                      const double* guess) {
   Impl& m = *impl_;
   Stats s;
+  factorise = factorise && kind_ == Preconditioner::lu;
   petsc(MatSetValuesCOO(m.A, values.data(), INSERT_VALUES));
   petsc(VecSetValuesCOO(m.b, b_values.data(), INSERT_VALUES));
   double t0 = wall_time();
@@ -84,11 +93,11 @@ ReusedLU::Stats ReusedLU::solve(const std::vector<double>& values, const std::ve
     // A fresh numeric factorisation of the new values (the symbolic one is the pattern's), then
     // x = A^-1 b by the factor alone.
     ++factorisations_;
-    petsc(PCSetReusePreconditioner(m.lu, PETSC_FALSE));
-    petsc(PCSetUp(m.lu));
+    petsc(PCSetReusePreconditioner(m.pc, PETSC_FALSE));
+    petsc(PCSetUp(m.pc));
     PCFailedReason failed = PC_NOERROR;
-    petsc(PCGetFailedReason(m.lu, &failed));
-    petsc(PCSetReusePreconditioner(m.lu, PETSC_TRUE));
+    petsc(PCGetFailedReason(m.pc, &failed));
+    petsc(PCSetReusePreconditioner(m.pc, PETSC_TRUE));
     const double t1 = wall_time();
     s.seconds_factorise = t1 - t0;
     t0 = t1;
@@ -96,9 +105,15 @@ ReusedLU::Stats ReusedLU::solve(const std::vector<double>& values, const std::ve
       s.seconds_solve = wall_time() - t0;
       return s;
     }
-    petsc(PCApply(m.lu, m.b, m.x));
+    petsc(PCApply(m.pc, m.b, m.x));
     s.ok = true;
   } else {
+    if (guess) {
+      PetscScalar* a = nullptr;
+      petsc(VecGetArray(m.x, &a));
+      for (long k = 0; k < n_; ++k) a[k] = guess[first_ + k];
+      petsc(VecRestoreArray(m.x, &a));
+    }
     petsc(KSPSetTolerances(m.krylov, rtol, 0.0, PETSC_DEFAULT, max_iterations));
     petsc(KSPSolve(m.krylov, m.b, m.x));
     PetscInt its = 0;
