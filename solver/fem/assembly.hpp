@@ -172,10 +172,11 @@ class NodeSystem {
 };
 
 /// This rank's share of a NodeSystem over mpirun's ranks (fem/fluid.hpp and fem/phase_field.hpp
-/// assemble and solve their systems so). Rank r of R owns the nodes of node planes
-/// [P r / R, P (r + 1) / R) along the grid's last axis (P planes; the node order has that axis
-/// slowest, so its rows are one range, numbered as one rank numbers them) and assembles the cells
-/// whose first plane is its own; its cells reach S - 1 planes into the next rank's rows. It hands
+/// assemble and solve their systems so). Along the grid's last axis (C cells, C + S - 1 node
+/// planes) rank r of R assembles the cells [C r / R, C (r + 1) / R) (an equal share of the work)
+/// and owns the rows of the nodes of the same planes, the last rank also those of the S - 1 planes
+/// above the last cell (the node order has that axis slowest, so a rank's rows are one range,
+/// numbered as one rank numbers them); its cells reach S - 1 planes into the next rank's rows. It hands
 /// PETSc every entry of A among the rows its cells touch (in the pattern's order; an entry none
 /// of its cells adds is an explicit zero) and the right-hand side of those rows; PETSc adds the
 /// ranks' parts. One rank: every cell and node, nothing handed.
@@ -198,11 +199,11 @@ class RankShare {
     over_ranks = parallel::distributed();
     if (!over_ranks) return;
     constexpr int last = Dim - 1;
-    const long P = g.nodes_per_axis()[last], across = static_cast<long>(nn) / P;
+    const long P = g.nodes_per_axis()[last], C = g.axis(last).cells, across = static_cast<long>(nn) / P;
     const long ranks = parallel::ranks(), r = parallel::rank();
-    const long p_lo = P * r / ranks, p_hi = P * (r + 1) / ranks;
+    const long p_lo = C * r / ranks, p_hi = r + 1 == ranks ? P : C * (r + 1) / ranks;
     cell_lo[last] = static_cast<int>(p_lo);
-    cell_hi[last] = static_cast<int>(std::min<long>(p_hi, g.axis(last).cells)) - 1;  // none when above the last cell
+    cell_hi[last] = static_cast<int>(C * (r + 1) / ranks) - 1;
     own_lo = static_cast<std::size_t>(p_lo * across), own_hi = static_cast<std::size_t>(p_hi * across);
     rhs_lo_ = p_lo * across * B, rhs_hi_ = std::min(P, p_hi + S - 1) * across * B;
     const int* outer = A.outerIndexPtr();
