@@ -28,10 +28,10 @@
 // (Adams–Bashforth). The system (eqs. 67-68) is linear in (v^{L+1}, p^{L+1}): assembled into a
 // fixed pattern (assembly.hpp) and solved by UMFPACK (linear/factorisation.hpp).
 //
-// Over mpirun's ranks (assembly.hpp's RankShare): rank r owns the nodes of an equal share of the
-// grid's node planes along its last axis and assembles the cells starting in them; the system is
-// solved by MUMPS's distributed LU under the same reuse rule (parallel/sparse_solve.hpp), and
-// every rank takes the whole solution (the state v, p, phi stays whole on every rank).
+// Over mpirun's ranks (assembly.hpp's RankShare): each rank assembles an equal share of the cells
+// along the grid's last axis and owns the rows of their nodes; the system is solved by MUMPS's
+// distributed LU under the same reuse rule (parallel/sparse_solve.hpp), and every rank takes the
+// whole solution (the state v, p, phi stays whole on every rank).
 //
 // Beyond the seed (each measured in docs/formulations.md, "mpm-fem"):
 // - the viscous term int n mu grad w : grad v (Laplacian form, theta = 1/2); the seed's weak form
@@ -203,8 +203,8 @@ class Fluid {
   const Grid<Dim>& grid() const { return *grid_; }
   const Basis& basis() const { return basis_; }
   const FluidProperties& properties() const { return props_; }
-  /// The last step's assembled system (A with its prescribed rows, rhs): bench/fluid_ksp.cpp
-  /// hands it to PETSc's solvers.
+  /// The last step's assembled system (A with its prescribed rows, rhs; over ranks this rank's
+  /// cells' part of it): bench/fluid_ksp.cpp hands it to PETSc's solvers.
   const System& system() const { return sys_; }
   const Conditions& conditions() const { return bcs_; }
 

@@ -115,6 +115,9 @@ class PhaseField {
     return V;
   }
 
+  /// The last step's assembled system (over ranks: this rank's cells' part of it).
+  const System& system() const { return sys_; }
+
   double last_correction = 0.0;  // the last step's lambda
   double last_corrected_volume = 0.0;  // m^Dim: what the last step's correction added to int n phi
 

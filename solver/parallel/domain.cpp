@@ -11,13 +11,11 @@
 #include <new>
 #include <type_traits>
 
+#include "solver/parallel/petsc_check.hpp"
+
 namespace swmpm::parallel {
 
 namespace {
-/// A PETSc call that failed (PETSc has printed its trace): an exception naming the code.
-void petsc(PetscErrorCode code) {
-  if (code != 0) throw std::runtime_error("PETSc error " + std::to_string(static_cast<int>(code)) + " (see above)");
-}
 /// The nodes of node columns [first, last) along `axis` (all across): leaves here, the same
 /// nodes on rank `owner_of(column)` as roots, for a star forest.
 template <class OwnerOf>

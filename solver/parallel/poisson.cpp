@@ -8,13 +8,9 @@
 #include <tuple>
 #include <utility>
 
-namespace swmpm::parallel {
+#include "solver/parallel/petsc_check.hpp"
 
-namespace {
-void petsc(PetscErrorCode code) {
-  if (code != 0) throw std::runtime_error("PETSc error " + std::to_string(static_cast<int>(code)) + " (see above)");
-}
-}  // namespace
+namespace swmpm::parallel {
 
 struct KspSolve::Impl {
   ::Mat A = nullptr;

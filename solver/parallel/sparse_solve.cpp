@@ -7,14 +7,9 @@
 #include <string>
 
 #include "solver/parallel/comm.hpp"
+#include "solver/parallel/petsc_check.hpp"
 
 namespace swmpm::parallel {
-
-namespace {
-void petsc(PetscErrorCode code) {
-  if (code != 0) throw std::runtime_error("PETSc error " + std::to_string(static_cast<int>(code)) + " (see above)");
-}
-}  // namespace
 
 // BiCGSTAB and its preconditioner; for an LU, the preconditioner alone is a direct solve right
 // after a factorisation.
@@ -24,14 +19,14 @@ struct SparseSolve::Impl {
   VecScatter to_all = nullptr;
   PC pc = nullptr;
   KSP krylov = nullptr;
-  void reset() {
-    KSPDestroy(&krylov);
-    PCDestroy(&pc);
-    VecScatterDestroy(&to_all);
-    VecDestroy(&x_all);
-    VecDestroy(&x);
-    VecDestroy(&b);
-    MatDestroy(&A);
+  void reset() {  // (one rank never sets anything up, and never starts PETSc: nothing to call)
+    if (krylov) KSPDestroy(&krylov);
+    if (pc) PCDestroy(&pc);
+    if (to_all) VecScatterDestroy(&to_all);
+    if (x_all) VecDestroy(&x_all);
+    if (x) VecDestroy(&x);
+    if (b) VecDestroy(&b);
+    if (A) MatDestroy(&A);
   }
   ~Impl() { reset(); }
 };
