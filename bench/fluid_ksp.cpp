@@ -114,7 +114,7 @@ int run(int cells_x, const char* only) {
     if (!fluid.step(soil, b, 1e-3)) {
       // A system too large for one rank's direct factor (3D at 40 cells: UMFPACK out of memory):
       // the candidates get the step's assembled system, from rest.
-      std::fprintf(stderr, "step %d: the one-rank direct solve failed; the candidates get its system\n", s);
+      std::fprintf(stderr, "step %d: the one-rank direct solve failed (%s); the candidates get its system\n", s, fluid.failure().c_str());
       direct_failed = true;
     }
   // The sixth step's system and the seventh's right-hand side (the solution moved on).

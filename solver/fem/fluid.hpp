@@ -48,6 +48,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <Eigen/IterativeLinearSolvers>
@@ -150,7 +151,7 @@ class Fluid {
 
   /// One step (the seed's algorithm step iii, eqs. 67-68): v^{L+1}, p^{L+1} from v^L, v^{L-1},
   /// the soil's fields at L and the body force b [m/s^2]. False when the factorisation or the
-  /// solve failed (a singular system).
+  /// solve failed (failure() says why).
   bool step(const SoilOnGrid<Dim>& soil, const Vec<Dim>& b, double dt) {
     assemble(soil, b, dt);
     if (!solve()) return false;
@@ -163,6 +164,8 @@ class Fluid {
     return true;
   }
 
+  /// Why the last step's solve failed, in words (the factorisation's reason; "" if it did not fail).
+  const std::string& failure() const { return share_.over_ranks ? ranks_lu_.failure() : lu_.failure(); }
   /// Solve statistics (run.json counters, bench/).
   long factorisations() const { return share_.over_ranks ? ranks_lu_.factorisations() : lu_.factorisations(); }
   long krylov_iterations = 0, solves = 0;

@@ -190,7 +190,8 @@ class MpmFem final : public Formulation<Dim> {
       fluid_time_ = soil_time_ + (substeps_ == 1 ? dt : substeps_ * dt);
       const double a0 = fluid_.seconds_assemble, f0 = fluid_.seconds_factorise, s0 = fluid_.seconds_solve;
       if (!fluid_.step(fsoil_, b, dt_f)) {                                                        // (iii)
-        st.health.report_node(0, {0, 0, 0}, "fluid", "the fluid's system could not be solved (singular)");
+        const std::string why = fluid_.failure().empty() ? "the solve failed" : fluid_.failure();
+        st.health.report_node(0, {0, 0, 0}, "fluid", "the fluid's system could not be solved: " + why);
         return;
       }
       this->times_.add("fluid assembly", fluid_.seconds_assemble - a0);

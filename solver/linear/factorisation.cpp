@@ -2,15 +2,30 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/UmfPackSupport>
+#include <cstdio>
+#include <string>
 #include <type_traits>
 
 namespace swmpm::linear {
 
+namespace {
+/// Eigen's UMFPACK wrapper with the status and statistics it keeps (protected there): why a
+/// factorisation failed, and the analysis' estimate of the factor's peak memory.
+struct UmfPack : Eigen::UmfPackLU<CscMatrix> {
+  int status() const { return m_fact_errorCode; }
+  double peak_memory_bytes() const { return m_umfpackInfo(UMFPACK_PEAK_MEMORY_ESTIMATE) * m_umfpackInfo(UMFPACK_SIZE_OF_UNIT); }
+};
+
+std::string gigabytes(double bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f GB", bytes / 1e9);
+  return text;
+}
+}  // namespace
+
 template <Method M>
 struct Direct<M>::Impl {
-  std::conditional_t<M == Method::cholesky, Eigen::CholmodSupernodalLLT<CscMatrix, Eigen::Lower>,
-                     Eigen::UmfPackLU<CscMatrix>>
-      solver;
+  std::conditional_t<M == Method::cholesky, Eigen::CholmodSupernodalLLT<CscMatrix, Eigen::Lower>, UmfPack> solver;
 };
 
 template <Method M>
@@ -45,7 +60,22 @@ template <Method M>
 bool Direct<M>::factorise(const CscMatrix& A) {
   impl_->solver.factorize(A);
   ++factorisations_;
-  return impl_->solver.info() == Eigen::Success;
+  const bool ok = impl_->solver.info() == Eigen::Success;
+  failure_.clear();
+  if (ok) return true;
+  if constexpr (M == Method::lu) {
+    const int status = impl_->solver.status();
+    if (status == UMFPACK_ERROR_out_of_memory)
+      failure_ = "UMFPACK ran out of memory factorising " + std::to_string(A.rows()) + " unknowns (its estimate of the peak: " +
+                 gigabytes(impl_->solver.peak_memory_bytes()) + ")";
+    else if (status == UMFPACK_WARNING_singular_matrix)
+      failure_ = "the matrix is singular (UMFPACK)";
+    else
+      failure_ = "UMFPACK's factorisation failed (status " + std::to_string(status) + ")";
+  } else {
+    failure_ = "the matrix is not positive definite (CHOLMOD)";
+  }
+  return false;
 }
 template <Method M>
 bool Direct<M>::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {

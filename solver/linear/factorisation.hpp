@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <string>
 
 #include "solver/linear/stencil.hpp"
 
@@ -34,6 +35,10 @@ class Direct {
   /// x = A^-1 b with the last factor; false if the solve failed.
   bool solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
 
+  /// Why the last factorisation failed, in words ("" after a success): LU says whether the
+  /// matrix was singular or the factor did not fit in memory (with UMFPACK's estimate of it).
+  const std::string& failure() const { return failure_; }
+
   long analyses() const { return analyses_; }
   long factorisations() const { return factorisations_; }
 
@@ -41,6 +46,7 @@ class Direct {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   long analyses_ = 0, factorisations_ = 0;
+  std::string failure_;
 };
 
 using Cholesky = Direct<Method::cholesky>;

@@ -38,7 +38,7 @@ void SparseSolve::set_pattern(long first, long n, long N, const std::vector<long
                               const std::vector<long>& b_rows) {
   Impl& m = *impl_;
   m.reset();
-  first_ = first, n_ = n;
+  first_ = first, n_ = n, n_total_ = N;
   petsc(MatCreate(PETSC_COMM_WORLD, &m.A));
   petsc(MatSetSizes(m.A, static_cast<PetscInt>(n), static_cast<PetscInt>(n), static_cast<PetscInt>(N), static_cast<PetscInt>(N)));
   petsc(MatSetType(m.A, MATAIJ));
@@ -96,7 +96,13 @@ SparseSolve::Stats SparseSolve::solve(const std::vector<double>& values, const s
     const double t1 = wall_time();
     s.seconds_factorise = t1 - t0;
     t0 = t1;
-    if (any(failed != PC_NOERROR)) {
+    failure_.clear();
+    if (const long worst = max(static_cast<long>(failed)); worst != PC_NOERROR) {  // the same words on every rank
+      const auto reason = static_cast<PCFailedReason>(worst);
+      failure_ = reason == PC_FACTOR_OUTMEMORY ? "MUMPS ran out of memory factorising " + std::to_string(n_total_) + " unknowns"
+                 : reason == PC_FACTOR_NUMERIC_ZEROPIVOT || reason == PC_FACTOR_STRUCT_ZEROPIVOT
+                     ? std::string("the matrix is singular (MUMPS: a zero pivot)")
+                     : "MUMPS's factorisation failed (PETSc's reason " + std::to_string(worst) + ")";
       s.seconds_solve = wall_time() - t0;
       return s;
     }

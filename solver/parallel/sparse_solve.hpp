@@ -20,6 +20,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace swmpm::parallel {
@@ -52,13 +53,16 @@ class SparseSolve {
               int max_iterations, std::vector<double>& x, const double* guess = nullptr);
 
   long factorisations() const { return factorisations_; }
+  /// Why the last factorisation failed, in words ("" after a success; the same on every rank).
+  const std::string& failure() const { return failure_; }
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
   Preconditioner kind_;
-  long first_ = 0, n_ = 0;
+  long first_ = 0, n_ = 0, n_total_ = 0;
   long factorisations_ = 0;
+  std::string failure_;
 };
 
 }  // namespace swmpm::parallel

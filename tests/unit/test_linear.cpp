@@ -182,8 +182,12 @@ TEST(Linear, LUSolvesNonSymmetricBlockSystems) {
   EXPECT_LT((x - x_true).norm() / x_true.norm(), 1e-13);
   EXPECT_EQ(lu.analyses(), 1);
   EXPECT_EQ(lu.factorisations(), 2);
-  // Singular: a zero column.
+  EXPECT_EQ(lu.failure(), "");
+  // Singular: a zero column, and the reason in words (mpm-fem reports it when its fluid fails).
   CscMatrix singular = A;
   for (int e = singular.outerIndexPtr()[5]; e < singular.outerIndexPtr()[6]; ++e) singular.valuePtr()[e] = 0.0;
   EXPECT_FALSE(lu.factorise(singular));
+  EXPECT_EQ(lu.failure(), "the matrix is singular (UMFPACK)");
+  ASSERT_TRUE(lu.factorise(A2));
+  EXPECT_EQ(lu.failure(), "");
 }
