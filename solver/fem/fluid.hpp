@@ -440,27 +440,55 @@ class Fluid {
   static constexpr double kTolerance = 1e-8;  // relative residual of the Krylov solve
 
   bool solve() {
-    if (share_.over_ranks) return solve_over_ranks();
     ++solves;
-    double t0 = omp_get_wtime();
-    if (lu_.factorisations() > 0 && !refactorise_ && last_iterations_ < kRefactoriseAfter) {
+    if (share_.over_ranks) share_.values(sys_.A, sys_.rhs, values_, b_values_);
+    if (factorisations() > 0 && !refactorise_ && last_iterations_ < kRefactoriseAfter) {
+      int iterations = 0;
+      const bool ok = reuse_factor(iterations);
+      krylov_iterations += iterations;
+      last_iterations_ = iterations;
+      if (ok) return true;
+    }
+    refactorise_ = false;
+    last_iterations_ = 0;
+    return factorise_and_solve();
+  }
+
+  /// BiCGSTAB from the last solution, preconditioned by the kept factor: UMFPACK's (Eigen's
+  /// BiCGSTAB) or, over the ranks, MUMPS's (PETSc's). False, x_ unchanged, if it did not converge.
+  bool reuse_factor(int& iterations) {
+    const double t0 = omp_get_wtime();
+    bool ok = false;
+    if (share_.over_ranks) {
+      const auto s = ranks_lu_.solve(values_, b_values_, false, kTolerance, kMaxReuseIterations, x_all_);
+      iterations = s.iterations;
+      ok = s.ok;
+      if (ok) x_ = Eigen::Map<const Eigen::VectorXd>(x_all_.data(), static_cast<long>(x_all_.size()));
+    } else {
       Eigen::BiCGSTAB<linear::CscMatrix, FactorPreconditioner> krylov;
       krylov.preconditioner().lu = &lu_;
       krylov.setTolerance(kTolerance);
       krylov.setMaxIterations(kMaxReuseIterations);
       krylov.compute(sys_.A);
       Eigen::VectorXd x = krylov.solveWithGuess(sys_.rhs, x_);
-      krylov_iterations += krylov.iterations();
-      last_iterations_ = static_cast<int>(krylov.iterations());
-      seconds_solve += omp_get_wtime() - t0;
-      if (krylov.info() == Eigen::Success && x.allFinite()) {
-        x_ = std::move(x);
-        return true;
-      }
-      t0 = omp_get_wtime();
+      iterations = static_cast<int>(krylov.iterations());
+      ok = krylov.info() == Eigen::Success && x.allFinite();
+      if (ok) x_ = std::move(x);
     }
-    refactorise_ = false;
-    last_iterations_ = 0;
+    seconds_solve += omp_get_wtime() - t0;
+    return ok;
+  }
+
+  /// A fresh factor of A (UMFPACK's, or over the ranks MUMPS's) and x = A^-1 b by it alone.
+  bool factorise_and_solve() {
+    if (share_.over_ranks) {
+      const auto s = ranks_lu_.solve(values_, b_values_, true, kTolerance, kMaxReuseIterations, x_all_);
+      seconds_factorise += s.seconds_factorise;
+      seconds_solve += s.seconds_solve;
+      if (s.ok) x_ = Eigen::Map<const Eigen::VectorXd>(x_all_.data(), static_cast<long>(x_all_.size()));
+      return s.ok;
+    }
+    const double t0 = omp_get_wtime();
     if (!lu_.factorise(sys_.A)) return false;
     const double t1 = omp_get_wtime();
     seconds_factorise += t1 - t0;
@@ -469,29 +497,6 @@ class Fluid {
     return ok && x_.allFinite();
   }
 
-  /// solve() over the ranks: the same rule, with MUMPS's factor and PETSc's BiCGSTAB.
-  bool solve_over_ranks() {
-    ++solves;
-    share_.values(sys_.A, sys_.rhs, values_, b_values_);
-    if (ranks_lu_.factorisations() > 0 && !refactorise_ && last_iterations_ < kRefactoriseAfter) {
-      const auto s = ranks_lu_.solve(values_, b_values_, false, kTolerance, kMaxReuseIterations, x_all_);
-      krylov_iterations += s.iterations;
-      last_iterations_ = s.iterations;
-      seconds_solve += s.seconds_solve;
-      if (s.ok) {
-        x_ = Eigen::Map<const Eigen::VectorXd>(x_all_.data(), static_cast<long>(x_all_.size()));
-        return true;
-      }
-    }
-    refactorise_ = false;
-    last_iterations_ = 0;
-    const auto s = ranks_lu_.solve(values_, b_values_, true, kTolerance, kMaxReuseIterations, x_all_);
-    seconds_factorise += s.seconds_factorise;
-    seconds_solve += s.seconds_solve;
-    if (!s.ok) return false;
-    x_ = Eigen::Map<const Eigen::VectorXd>(x_all_.data(), static_cast<long>(x_all_.size()));
-    return true;
-  }
   struct Local {
     using MatKG = Eigen::Matrix<double, K, G>;
     using MatKK = Eigen::Matrix<double, K, K>;

@@ -27,7 +27,7 @@
 // mixture continuity matches the moving porosity, and a column collapsing into water lost 12.7 %
 // when each step only restored its own start.
 //
-// Over mpirun's ranks each rank assembles the cells of its node planes (assembly.hpp's RankShare)
+// Over mpirun's ranks each rank assembles its share of the cells (assembly.hpp's RankShare)
 // and PETSc's BiCGSTAB with the diagonal solves the system (parallel/sparse_solve.hpp); every rank
 // takes the whole phi, and the volume correction runs whole on every rank.
 #pragma once

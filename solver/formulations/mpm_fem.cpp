@@ -309,8 +309,9 @@ class MpmFem final : public Formulation<Dim> {
     damping_ = phase_damping(phase, scene_damping_);
   }
   std::size_t active_cells(const State<Dim>& st) const override { return count_active_cells(grid_, st.solid); }
-  /// mpirun: the soil points over the ranks (parallel::Domain); the fluid, the phase field and
-  /// their solves on every rank, whole (the soil's nodal fields shared first): see step.
+  /// mpirun: the soil points over the ranks (parallel::Domain); the fluid's and phase field's
+  /// systems assembled per rank and solved over the ranks, their nodal state whole on every rank
+  /// (the soil's nodal fields shared first): see step and fem/assembly.hpp's RankShare.
   std::string on_several_ranks(const scene::Scene&) const override { return {}; }  // every option runs on several ranks
   void distribute(State<Dim>& st) override {
     parallel::distribute<Shape>(domain_, grid_, st, schedule_, material_particles_);

@@ -716,7 +716,8 @@ TEST(Mpirun, SemiImplicitDoublePointEscapedWaterTiedInitialisationAndResumeAcros
 }
 
 /// A saturated gravel block launched at 2 m/s through a pool (mpm-fem: the soil on points over the
-/// ranks, the pool's water on the grid, solved whole on every rank); the block crosses the cut.
+/// ranks, the pool's water on the grid, its system assembled per rank and solved over the ranks);
+/// the block crosses the cut.
 /// Monitors: a soil point, a grid probe of the fluid, a grid water-level gauge, the energies.
 nlohmann::json mpm_fem_block(int dim) {
   const bool three = dim == 3;
