@@ -788,21 +788,10 @@ class Runner {
     const auto start = std::chrono::steady_clock::now();
     const diagnostics::Energies e{parallel::sum(f_->kinetic_energy(state_)), parallel::sum(f_->strain_energy(state_)),
                                   guard_.energy0, guard_.work};
-    diagnostics::FrameIndicators fi;
-    if (parallel::distributed()) {
-      // mpirun: rank 0 measures the whole sets, gathered in the one-rank run's order.
-      State<Dim> whole;
-      whole.solid = parallel::gather_set(state_.solid);
-      whole.fluid = parallel::gather_set(state_.fluid);
-      whole.time = state_.time;
-      whole.step = state_.step;
-      if (!root()) return;
-      fi = diagnostics::measure<Dim>(whole, nodes.empty() ? nullptr : &nodes, e, gravity_at(state_.time),
-                                     state_.time - clock_.t_start);
-    } else {
-      fi = diagnostics::measure<Dim>(state_, nodes.empty() ? nullptr : &nodes, e, gravity_at(state_.time),
-                                     state_.time - clock_.t_start);
-    }
+    // mpirun: every rank measures its share (with copies of the points near it); rank 0 records.
+    const diagnostics::FrameIndicators fi = diagnostics::measure<Dim>(
+        state_, nodes.empty() ? nullptr : &nodes, e, gravity_at(state_.time), state_.time - clock_.t_start);
+    if (!root()) return;
     const std::vector<std::string> warnings = stability_.add(fi);
     stability_.add_seconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     log_.file_line(diagnostics::StabilityReport::frame_line(fi));

@@ -18,16 +18,26 @@ double typical_spacing(std::span<const double> V0, int dim) {
   return *mid;
 }
 
+Point lowest_corner(std::span<const Point> x) {
+  Point lo{0, 0, 0};
+  for (int a = 0; a < 3; ++a) {
+    bool any = false;
+    for (const auto& q : x)
+      if (std::isfinite(q[a])) lo[a] = any ? std::min(lo[a], q[a]) : q[a], any = true;
+  }
+  return lo;
+}
+
 Neighbourhood::Neighbourhood(std::span<const Point> x, int dim, double radius)
+    : Neighbourhood(x, dim, radius, lowest_corner(x), {}) {}
+
+Neighbourhood::Neighbourhood(std::span<const Point> x, int dim, double radius, const Point& lo,
+                             std::span<const std::int64_t> keys)
     : x_(x.begin(), x.end()), dim_(dim), radius_(radius) {
   if (dim != 2 && dim != 3) throw std::invalid_argument("Neighbourhood: dim must be 2 or 3");
   if (!(radius > 0.0)) throw std::invalid_argument("Neighbourhood: the radius must be positive");
   const std::size_t n = x_.size();
-  Point lo{0, 0, 0};
-  if (n) lo = x_[0];
-  for (const auto& q : x_)
-    for (int a = 0; a < 3; ++a)
-      if (std::isfinite(q[a])) lo[a] = std::min(lo[a], q[a]);
+  if (!keys.empty() && keys.size() != n) throw std::invalid_argument("Neighbourhood: one key per point expected");
   bin_.resize(n);
   // Bins of side `radius` from the lowest corner; a bin index is clamped far beyond any grid (a
   // non-finite position lands in bin 0, where its distance to every point is NaN: no neighbour).
@@ -39,10 +49,11 @@ Neighbourhood::Neighbourhood(std::span<const Point> x, int dim, double radius)
     }
   sorted_.resize(n);
   for (std::size_t p = 0; p < n; ++p) sorted_[p] = static_cast<std::uint32_t>(p);
+  auto key = [&](std::uint32_t p) { return keys.empty() ? std::int64_t{p} : keys[p]; };
   std::sort(sorted_.begin(), sorted_.end(), [&](std::uint32_t a, std::uint32_t b) {
     if (after(bin_[b], bin_[a])) return true;
     if (after(bin_[a], bin_[b])) return false;
-    return a < b;
+    return key(a) < key(b);
   });
 }
 
@@ -80,38 +91,57 @@ double plane_residual(const Neighbourhood& nb, std::span<const double> value, st
 
 }  // namespace
 
-Checkerboard checkerboard(const Neighbourhood& nb, std::span<const double> value, double absolute_floor) {
-  Checkerboard c;
-  const std::size_t n = nb.size();
-  if (value.size() != n) throw std::invalid_argument("checkerboard: one value per point expected");
-  if (n == 0) return c;
-  const Range r = range(value);
-  double largest = 0.0;
-  for (double v : value) largest = std::max(largest, std::abs(v));
-  c.scale = std::max({r.max - r.min, kRangeRelativeFloor * largest, absolute_floor});
-  if (!(c.scale > 0.0) || !std::isfinite(c.scale)) return c;
-  std::vector<double> residual(n);
+double checkerboard_scale(double min, double max, double largest, double absolute_floor) {
+  return std::max({max - min, kRangeRelativeFloor * largest, absolute_floor});
+}
+
+CheckerboardPart checkerboard_part(const Neighbourhood& nb, std::span<const double> value, std::size_t owned) {
+  CheckerboardPart c;
+  if (value.size() != nb.size() || owned > nb.size())
+    throw std::invalid_argument("checkerboard: one value per point expected");
+  std::vector<double> residual(owned);
   const int min_neighbours = nb.dim() == 3 ? kMinNeighbours3D : kMinNeighbours2D;
-  const long m = static_cast<long>(n);
+  const long m = static_cast<long>(owned);
 #pragma omp parallel for schedule(static) if (m > 2048)
   for (long p = 0; p < m; ++p)
     residual[p] = nb.dim() == 3 ? plane_residual<3>(nb, value, static_cast<std::size_t>(p), min_neighbours)
                                 : plane_residual<2>(nb, value, static_cast<std::size_t>(p), min_neighbours);
-  double sum = 0.0;  // in index order: the same bits for any thread count
-  for (std::size_t p = 0; p < n; ++p) {
+  for (std::size_t p = 0; p < owned; ++p) {  // in index order: the same bits for any thread count
     const double e = residual[p];
     if (std::isnan(e)) continue;
-    sum += e * e;
+    c.sum_squares += e * e;
     ++c.fitted;
     if (c.worst < 0 || std::abs(e) > std::abs(c.worst_residual)) {
       c.worst = static_cast<long>(p);
       c.worst_residual = e;
     }
   }
+  return c;
+}
+
+Checkerboard checkerboard_of(const CheckerboardPart& whole, double scale) {
+  Checkerboard c;
+  c.scale = scale;
+  c.fitted = whole.fitted;
+  c.worst = whole.worst;
+  c.worst_residual = whole.worst_residual;
   if (c.fitted == 0) return c;
-  c.rms = std::sqrt(sum / static_cast<double>(c.fitted));
+  c.rms = std::sqrt(whole.sum_squares / static_cast<double>(c.fitted));
   c.index = c.rms / c.scale;
   return c;
+}
+
+Checkerboard checkerboard(const Neighbourhood& nb, std::span<const double> value, double absolute_floor) {
+  const std::size_t n = nb.size();
+  if (value.size() != n) throw std::invalid_argument("checkerboard: one value per point expected");
+  Checkerboard c;
+  if (n == 0) return c;
+  const Range r = range(value);
+  double largest = 0.0;
+  for (double v : value) largest = std::max(largest, std::abs(v));
+  c.scale = checkerboard_scale(r.min, r.max, largest, absolute_floor);
+  if (!(c.scale > 0.0) || !std::isfinite(c.scale)) return c;
+  return checkerboard_of(checkerboard_part(nb, value, n), c.scale);
 }
 
 AtRest at_rest(const Neighbourhood& nb, std::span<const double> displacement, std::span<const double> speed,
@@ -128,9 +158,16 @@ AtRest at_rest(const Neighbourhood& nb, std::span<const double> displacement, st
     }
   }
   if (!(a.displacement_max > 0.0)) return a;  // nothing has moved: no region is "at rest" relative to motion
-  const double bound = fraction * a.displacement_max;
-  std::vector<char> rest(n, 0);
-  const long m = static_cast<long>(n);
+  at_rest_part(nb, displacement, speed, fraction * a.displacement_max, n, a);
+  return a;
+}
+
+void at_rest_part(const Neighbourhood& nb, std::span<const double> displacement, std::span<const double> speed,
+                  double bound, std::size_t owned, AtRest& a) {
+  if (displacement.size() != nb.size() || speed.size() < owned || owned > nb.size())
+    throw std::invalid_argument("at_rest: one displacement per point and one speed per own point expected");
+  std::vector<char> rest(owned, 0);
+  const long m = static_cast<long>(owned);
 #pragma omp parallel for schedule(static) if (m > 2048)
   for (long p = 0; p < m; ++p) {
     const auto pp = static_cast<std::size_t>(p);
@@ -139,7 +176,7 @@ AtRest at_rest(const Neighbourhood& nb, std::span<const double> displacement, st
     nb.for_each_neighbour(pp, [&](std::size_t q) { all = all && displacement[q] <= bound; });
     rest[pp] = all ? 1 : 0;
   }
-  for (std::size_t p = 0; p < n; ++p) {
+  for (std::size_t p = 0; p < owned; ++p) {
     if (!rest[p]) continue;
     ++a.count;
     if (a.worst < 0 || speed[p] > a.speed) {
@@ -147,7 +184,6 @@ AtRest at_rest(const Neighbourhood& nb, std::span<const double> displacement, st
       a.worst = static_cast<long>(p);
     }
   }
-  return a;
 }
 
 Range range(std::span<const double> value) {

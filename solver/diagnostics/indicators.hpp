@@ -48,13 +48,24 @@ inline constexpr double kCavitationBound = -1.0e5;  // Pa
 /// initial volume, m^3, or the area per metre, m^2, in 2D). 0 for an empty set.
 double typical_spacing(std::span<const double> V0, int dim);
 
+/// The lowest corner of the points' finite coordinates (0 on an axis where none is finite): where
+/// a Neighbourhood's bins start.
+Point lowest_corner(std::span<const Point> x);
+
 /// Points of one set (positions copied) with a fixed-radius neighbour search: the points sorted by
-/// their bin (cubes or squares of side `radius`, sorted z, y, x, then by index), so that one
-/// binary search finds the three consecutive bins of a row. Any spread of positions costs memory
-/// in proportion to the points only.
+/// their bin (cubes or squares of side `radius` from `origin`, sorted z, y, x, then by key), so
+/// that one binary search finds the three consecutive bins of a row. Any spread of positions costs
+/// memory in proportion to the points only.
+///
+/// By default the origin is the points' lowest corner and a point's key its index. Ranks that
+/// each measure their share of a set (with copies of the other ranks' points near it) pass the
+/// whole set's lowest corner and the particles' keys (their one-rank storage order): every point
+/// then meets its neighbours in the order the one-rank run does, and its sums have the same bits.
 class Neighbourhood {
  public:
   Neighbourhood(std::span<const Point> x, int dim, double radius);
+  Neighbourhood(std::span<const Point> x, int dim, double radius, const Point& origin,
+                std::span<const std::int64_t> keys);
   std::size_t size() const { return x_.size(); }
   int dim() const { return dim_; }
   double radius() const { return radius_; }
@@ -109,6 +120,20 @@ struct Checkerboard {
 };
 Checkerboard checkerboard(const Neighbourhood& nb, std::span<const double> value, double absolute_floor = 0.0);
 
+/// The index in parts, for ranks that each hold a share of the points: the scale from the whole
+/// field's smallest and largest value and largest |value|; each rank's residuals of its own points
+/// [0, owned) (their neighbours may lie beyond: the other ranks' points near it); the index from
+/// the parts summed (`worst` then indexes the rank's points that had it).
+double checkerboard_scale(double min, double max, double largest, double absolute_floor);
+struct CheckerboardPart {
+  double sum_squares = 0.0;
+  std::size_t fitted = 0;
+  long worst = -1;
+  double worst_residual = 0.0;
+};
+CheckerboardPart checkerboard_part(const Neighbourhood& nb, std::span<const double> value, std::size_t owned);
+Checkerboard checkerboard_of(const CheckerboardPart& whole, double scale);
+
 /// The largest speed among the points at rest (kAtRestFraction above). No point is at rest
 /// before anything has moved (largest displacement 0).
 struct AtRest {
@@ -121,6 +146,10 @@ struct AtRest {
 };
 AtRest at_rest(const Neighbourhood& nb, std::span<const double> displacement, std::span<const double> speed,
                double fraction = kAtRestFraction);
+/// A rank's part: its own points [0, owned) at rest, judged against `bound` (the fraction of the
+/// whole set's largest displacement, m) over all their neighbours; fills count, speed and worst.
+void at_rest_part(const Neighbourhood& nb, std::span<const double> displacement, std::span<const double> speed,
+                  double bound, std::size_t owned, AtRest& a);
 
 /// The smallest and largest value and where (the first index of each). Empty: NaN, -1.
 struct Range {

@@ -3,11 +3,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <bit>
+#include <cstring>
 #include <iomanip>
+#include <numeric>
+#include <optional>
 #include <sstream>
 
 #include "solver/common.hpp"
 #include "solver/diagnostics/indicators.hpp"
+#include "solver/parallel/comm.hpp"
 
 namespace swmpm::diagnostics {
 
@@ -19,40 +24,164 @@ std::string fmt(double v, int prec = 4) {
   return os.str();
 }
 
-/// A set's neighbourhood (its positions as 3-vectors, radius 1.6 typical spacings), and the place
-/// of its point k.
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// A point that holds a frame's extreme value on one rank (key -1: none there), and the one the
+/// whole run's loop over the set in key order finds first: the largest value (`larger`) or the
+/// smallest, the smaller key among equal values, a point of set `set`. Collective; at one rank it
+/// is `mine`.
+struct Candidate {
+  double value = std::numeric_limits<double>::quiet_NaN();
+  std::int64_t key = -1;
+  Place place;
+};
+
+Candidate best_over_ranks(const Candidate& mine, bool larger, const char* set, int dim) {
+  if (!parallel::distributed()) return mine;
+  std::vector<char> bytes(sizeof(double) * 6);
+  const double id = static_cast<double>(mine.place.id);  // ids below 2^53
+  const double fields[6] = {mine.value, static_cast<double>(mine.key), id, mine.place.x[0], mine.place.x[1], mine.place.x[2]};
+  std::memcpy(bytes.data(), fields, sizeof fields);
+  Candidate best;
+  best.place.set = set;
+  best.place.dim = dim;
+  for (const auto& part : parallel::all_gather(bytes)) {
+    double got[6];
+    std::memcpy(got, part.data(), sizeof got);
+    const auto key = static_cast<std::int64_t>(got[1]);
+    if (key < 0) continue;
+    const double v = got[0];
+    const bool better = best.key < 0 || (larger ? v > best.value : v < best.value) || (v == best.value && key < best.key);
+    if (!better) continue;
+    best.value = v;
+    best.key = key;
+    best.place.id = static_cast<long>(got[2]);
+    best.place.x = {got[3], got[4], got[5]};
+  }
+  if (best.key < 0) best.place = {};
+  return best;
+}
+
+/// A set as this rank measures it: its own points first ([0, owned), in key order), then copies of
+/// the other ranks' points within the neighbourhood radius (1.6 typical spacings) of its own
+/// points' bounding box (ghosts), with what the neighbour measures read of them: the displacement,
+/// and the mean effective stress and pore pressure when the set has them. The bins start at the
+/// whole set's lowest corner and the points meet their neighbours in key order, so every own
+/// point's neighbour sums are those of the one-rank run. One rank: no ghosts, keys the indices.
 template <int Dim>
 struct SetView {
   const ParticleSet<Dim>& ps;
   const char* name;
-  Neighbourhood nb;
-  static std::vector<Point> points(const ParticleSet<Dim>& ps) {
-    std::vector<Point> x(ps.size(), Point{0, 0, 0});
-    for (std::size_t p = 0; p < ps.size(); ++p)
-      for (int a = 0; a < Dim; ++a) x[p][a] = ps.x[p][a];
-    return x;
+  long whole = 0;          // points of the set over all ranks
+  std::size_t owned = 0;   // this rank's
+  std::vector<Point> x;    // m
+  std::vector<std::int64_t> key;
+  std::vector<double> u;            // m, |x - x0|
+  std::vector<double> mean_stress;  // Pa, effective, compression positive (with_stress)
+  std::vector<double> p;            // Pa, pore or water pressure (with_pressure)
+  std::optional<Neighbourhood> nb;
+
+  SetView(const ParticleSet<Dim>& set, const char* set_name, long whole_size, bool with_stress, bool with_pressure)
+      : ps(set), name(set_name), whole(whole_size), owned(set.size()) {
+    x.assign(owned, Point{0, 0, 0});
+    key.resize(owned);
+    u.resize(owned);
+    for (std::size_t q = 0; q < owned; ++q) {
+      for (int a = 0; a < Dim; ++a) x[q][a] = ps.x[q][a];
+      key[q] = ps.key.empty() ? static_cast<std::int64_t>(q) : ps.key[q];
+      u[q] = (ps.x[q] - ps.x0[q]).norm();
+    }
+    if (with_stress) {
+      mean_stress.resize(owned);
+      for (std::size_t q = 0; q < owned; ++q) mean_stress[q] = swmpm::mean_stress(ps.sigma[q]);
+    }
+    if (with_pressure) p.assign(ps.p.begin(), ps.p.begin() + static_cast<std::ptrdiff_t>(owned));
+    const double s = typical_spacing_over_ranks(ps.V0, Dim, whole);
+    const double radius = s > 0.0 ? kRadiusInSpacings * s : 1.0;
+    // The whole set's lowest corner (lowest_corner over the ranks).
+    std::array<double, 3> lo{kInf, kInf, kInf};
+    for (const auto& q : x)
+      for (int a = 0; a < 3; ++a)
+        if (std::isfinite(q[a])) lo[a] = std::min(lo[a], q[a]);
+    parallel::min(std::span<double>(lo));
+    for (double& c : lo)
+      if (c == kInf) c = 0.0;
+    if (parallel::distributed()) add_ghosts(radius, with_stress, with_pressure);
+    nb.emplace(x, Dim, radius, lo, key);
   }
-  static double radius(const ParticleSet<Dim>& ps) {
-    const double s = typical_spacing(ps.V0, Dim);
-    return s > 0.0 ? kRadiusInSpacings * s : 1.0;
+
+  /// Every rank's bounding box of its own finite points; each rank sends those of its points within
+  /// `radius` of another's box to it (one all-to-all). Collective.
+  void add_ghosts(double radius, bool with_stress, bool with_pressure) {
+    std::array<double, 6> box{kInf, kInf, kInf, -kInf, -kInf, -kInf};  // lo, hi
+    for (const auto& q : x)
+      for (int a = 0; a < 3; ++a)
+        if (std::isfinite(q[a])) box[a] = std::min(box[a], q[a]), box[3 + a] = std::max(box[3 + a], q[a]);
+    std::vector<char> mine(sizeof box);
+    std::memcpy(mine.data(), box.data(), sizeof box);
+    const auto boxes = parallel::all_gather(mine);
+    constexpr std::size_t kRecord = 7;  // key, x, y, z, u, mean stress, p
+    std::vector<std::vector<char>> to(boxes.size());
+    for (std::size_t r = 0; r < boxes.size(); ++r) {
+      if (static_cast<int>(r) == parallel::rank()) continue;
+      std::array<double, 6> b;
+      std::memcpy(b.data(), boxes[r].data(), sizeof b);
+      auto near = [&](const Point& q) {
+        for (int a = 0; a < Dim; ++a)
+          if (!(q[a] >= b[a] - radius && q[a] <= b[3 + a] + radius)) return false;
+        return true;
+      };
+      if (!(b[0] <= b[3])) continue;  // a rank without points
+      std::vector<double> records;
+      for (std::size_t q = 0; q < owned; ++q) {
+        if (!near(x[q])) continue;
+        records.insert(records.end(), {std::bit_cast<double>(key[q]), x[q][0], x[q][1], x[q][2], u[q],
+                                       with_stress ? mean_stress[q] : 0.0, with_pressure ? p[q] : 0.0});
+      }
+      to[r].resize(records.size() * sizeof(double));
+      std::memcpy(to[r].data(), records.data(), to[r].size());
+    }
+    for (const auto& part : parallel::all_to_all(to)) {
+      const std::size_t n = part.size() / (kRecord * sizeof(double));
+      for (std::size_t g = 0; g < n; ++g) {
+        double r[kRecord];
+        std::memcpy(r, part.data() + g * sizeof r, sizeof r);
+        key.push_back(std::bit_cast<std::int64_t>(r[0]));
+        x.push_back({r[1], r[2], r[3]});
+        u.push_back(r[4]);
+        if (with_stress) mean_stress.push_back(r[5]);
+        if (with_pressure) p.push_back(r[6]);
+      }
+    }
   }
-  SetView(const ParticleSet<Dim>& set, const char* set_name)
-      : ps(set), name(set_name), nb(points(set), Dim, radius(set)) {}
+
   Place place(long k) const {
     if (k < 0) return {};
-    return {name, static_cast<long>(ps.id[k]), nb.x(static_cast<std::size_t>(k)), Dim};
+    return {name, static_cast<long>(ps.id[static_cast<std::size_t>(k)]), x[static_cast<std::size_t>(k)], Dim};
   }
-  /// The largest extent of the set's bounding box [m].
+  /// The candidate of own point k (-1: none) with `value`, and the best over the ranks.
+  Candidate best(double value, long k, bool larger) const {
+    Candidate c;
+    if (k >= 0) c = {value, key[static_cast<std::size_t>(k)], place(k)};
+    return best_over_ranks(c, larger, name, Dim);
+  }
+  /// The smallest and largest of own points' `value` and where, over the ranks.
+  std::pair<Candidate, Candidate> range_over_ranks(std::span<const double> value) const {
+    const Range r = range(value.first(owned));
+    return {best(r.min, r.at_min, false), best(r.max, r.at_max, true)};
+  }
+  /// The largest extent of the whole set's bounding box [m].
   double extent() const {
-    double e = 0.0;
-    for (int a = 0; a < Dim; ++a) {
-      double lo = 0.0, hi = 0.0;
-      for (std::size_t p = 0; p < nb.size(); ++p) {
-        lo = p ? std::min(lo, nb.x(p)[a]) : nb.x(p)[a];
-        hi = p ? std::max(hi, nb.x(p)[a]) : nb.x(p)[a];
+    std::array<double, 3> lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};
+    for (int a = 0; a < Dim; ++a)
+      for (std::size_t q = 0; q < owned; ++q) {
+        lo[a] = q ? std::min(lo[a], x[q][a]) : x[q][a];
+        hi[a] = q ? std::max(hi[a], x[q][a]) : x[q][a];
       }
-      e = std::max(e, hi - lo);
-    }
+    parallel::min(std::span<double>(lo));
+    parallel::max(std::span<double>(hi));
+    double e = 0.0;
+    for (int a = 0; a < Dim; ++a) e = std::max(e, hi[a] - lo[a]);
     return e;
   }
 };
@@ -67,34 +196,73 @@ struct Motion {
   double extent = 0.0;             // m
 };
 
+/// at_rest over the ranks: the set's largest displacement is reduced first, then each rank judges
+/// its own points against their neighbours (ghosts included).
 template <int Dim>
 void add_motion(const SetView<Dim>& v, double elapsed, Motion& m) {
-  const std::size_t n = v.nb.size();
-  std::vector<double> u(n), speed(n);
+  const std::size_t n = v.owned;
+  std::vector<double> speed(n);
+  for (std::size_t p = 0; p < n; ++p) speed[p] = v.ps.v[p].norm();
+  AtRest a;
   for (std::size_t p = 0; p < n; ++p) {
-    u[p] = (v.ps.x[p] - v.ps.x0[p]).norm();
-    speed[p] = v.ps.v[p].norm();
+    a.displacement_max = std::max(a.displacement_max, v.u[p]);
+    if (speed[p] > a.speed_max || a.fastest < 0) {
+      a.speed_max = std::max(a.speed_max, speed[p]);
+      a.fastest = static_cast<long>(p);
+    }
   }
-  const AtRest a = at_rest(v.nb, u, speed);
-  if (a.count > 0 && a.speed > m.speed) {
-    m.speed = a.speed;
-    m.at = v.place(a.worst);
+  a.displacement_max = parallel::max(a.displacement_max);
+  const Candidate fastest = v.best(a.speed_max, a.fastest, true);
+  // Nothing has moved: no region is "at rest" relative to motion.
+  if (a.displacement_max > 0.0) at_rest_part(*v.nb, v.u, speed, kAtRestFraction * a.displacement_max, n, a);
+  const long count = parallel::sum(static_cast<long>(a.count));
+  const Candidate rest = v.best(a.speed, a.count > 0 ? a.worst : -1, true);
+  if (count > 0 && rest.value > m.speed) {
+    m.speed = rest.value;
+    m.at = rest.place;
   }
   if (elapsed > 0.0) m.displacement_rate = std::max(m.displacement_rate, a.displacement_max / elapsed);
-  if (a.fastest >= 0 && (m.fastest.set.empty() || a.speed_max > m.speed_max)) {
-    m.speed_max = a.speed_max;
-    m.fastest = v.place(a.fastest);
+  if (fastest.key >= 0 && (m.fastest.set.empty() || fastest.value > m.speed_max)) {
+    m.speed_max = fastest.value;
+    m.fastest = fastest.place;
   }
   m.extent = std::max(m.extent, v.extent());
 }
 
+/// The checkerboard index over the ranks: the scale from the reduced range, the residual sums of
+/// each rank's own points added (their order differs from one rank's: round-off), the worst
+/// residual's point the one-rank run's.
 template <int Dim>
-void set_checkerboard(FrameIndicators& f, Indicator k, const SetView<Dim>& v, std::span<const double> value) {
-  const Checkerboard c = checkerboard(v.nb, value, kStressFloor);
-  f.value[k] = c.index;
-  f.where[k] = v.place(c.worst);
+void set_checkerboard(FrameIndicators& f, Indicator k, const SetView<Dim>& v, const std::vector<double>& value) {
+  const std::span<const double> own(value.data(), v.owned);
+  const Range r = range(own);
+  double largest = 0.0;
+  for (double x : own) largest = std::max(largest, std::abs(x));
+  const double scale = checkerboard_scale(parallel::min(v.owned ? r.min : kInf), parallel::max(v.owned ? r.max : -kInf),
+                                          parallel::max(largest), kStressFloor);
+  f.value[k] = 0.0;
+  f.where[k] = {};
+  if (!(scale > 0.0) || !std::isfinite(scale)) return;
+  CheckerboardPart part = checkerboard_part(*v.nb, value, v.owned);
+  const Candidate worst = v.best(std::abs(part.worst_residual), part.worst, true);
+  part.sum_squares = parallel::sum(part.sum_squares);
+  part.fitted = static_cast<std::size_t>(parallel::sum(static_cast<long>(part.fitted)));
+  f.value[k] = checkerboard_of(part, scale).index;
+  f.where[k] = worst.place;
 }
 
+/// The cavitating fraction over the ranks, of this rank's pressures `p` at points `index` of v.
+template <int Dim>
+void set_cavitation(FrameIndicators& f, const SetView<Dim>& v, std::span<const double> p, const std::vector<long>& index) {
+  const Cavitation c = cavitation(p);
+  const Candidate lowest = v.best(c.p_min, c.lowest >= 0 ? index[static_cast<std::size_t>(c.lowest)] : -1, false);
+  f.water_points = static_cast<std::size_t>(parallel::sum(static_cast<long>(c.points)));
+  f.cavitating = static_cast<std::size_t>(parallel::sum(static_cast<long>(c.below)));
+  f.value[cavitation_fraction] = f.water_points ? static_cast<double>(f.cavitating) / static_cast<double>(f.water_points) : 0.0;
+  f.where[cavitation_fraction] = lowest.place;
+}
+
+/// The grid's cavitation (mpm-fem; the grid is whole on the rank that measures it).
 void set_cavitation(FrameIndicators& f, std::span<const double> p, const Place& lowest) {
   const Cavitation c = cavitation(p);
   f.value[cavitation_fraction] = c.fraction;
@@ -102,8 +270,31 @@ void set_cavitation(FrameIndicators& f, std::span<const double> p, const Place& 
   f.water_points = c.points;
   f.cavitating = c.below;
 }
-
 }  // namespace
+
+// Bisection on the spacings' bits (non-negative doubles order as their bits), one count over the
+// ranks per bit: 63 sums at most.
+double typical_spacing_over_ranks(std::span<const double> V0, int dim, long whole) {
+  if (!parallel::distributed()) return typical_spacing(V0, dim);
+  if (whole == 0) return 0.0;
+  std::vector<std::uint64_t> bits(V0.size());
+  for (std::size_t p = 0; p < V0.size(); ++p) {
+    const double s = std::pow(std::max(V0[p], 0.0), 1.0 / dim);
+    bits[p] = std::bit_cast<std::uint64_t>(s >= 0.0 ? s : kInf);
+  }
+  std::sort(bits.begin(), bits.end());
+  // The k-th smallest (k = whole / 2, from 0, as typical_spacing's nth_element): the smallest u
+  // with at least k + 1 spacings of bits <= u.
+  const long k = whole / 2;
+  std::uint64_t lo = 0, hi = std::bit_cast<std::uint64_t>(kInf);
+  while (lo < hi) {
+    const std::uint64_t mid = lo + (hi - lo) / 2;
+    const long below = parallel::sum(static_cast<long>(std::upper_bound(bits.begin(), bits.end(), mid) - bits.begin()));
+    if (below >= k + 1) hi = mid;
+    else lo = mid + 1;
+  }
+  return std::bit_cast<double>(lo);
+}
 
 std::string Place::text() const {
   if (set.empty()) return "the whole model";
@@ -129,43 +320,45 @@ FrameIndicators measure(const State<Dim>& s, const GridFields* grid, const Energ
   FrameIndicators f;
   f.time = s.time;
   Motion motion;
+  // mpirun: each rank holds its share of the sets (and rank 0 the grid fields); every decision
+  // below is taken on the whole run's counts, so that the ranks meet in the same collectives.
+  const long solid_points = parallel::sum(static_cast<long>(s.solid.size()));
+  const long water_points_n = parallel::sum(static_cast<long>(s.fluid.size()));
 
   // Where the pore or free water's pressure lives: on the grid (mpm-fem), on the water points
   // (double-point), or on the soil points (single-point); a dry run has none.
   const scene::PointArray* grid_p = grid ? grid->cloud.find("pressure") : nullptr;
   const scene::PointArray* grid_phi = grid ? grid->cloud.find("phase_field") : nullptr;
-  const bool on_grid = grid_p && grid_phi;
-  const bool water_points = !on_grid && s.fluid.size() > 0 && s.fluid.p.size() == s.fluid.size();
-  const bool soil_pressure = !on_grid && !water_points && s.solid.two_phase() && s.solid.size() > 0;
+  const bool on_grid = parallel::any(grid_p && grid_phi);
+  const bool water_points =
+      !on_grid && parallel::any(s.fluid.size() > 0 && s.fluid.p.size() == s.fluid.size());
+  const bool soil_pressure = !on_grid && !water_points && s.solid.two_phase() && solid_points > 0;
 
-  if (s.solid.size() > 0) {
-    const SetView<Dim> v(s.solid, "solid");
+  if (solid_points > 0) {
+    const bool stress = parallel::any(s.solid.size() > 0 && !s.solid.sigma.empty());
+    const SetView<Dim> v(s.solid, "solid", solid_points, stress, soil_pressure);
     const std::size_t n = s.solid.size();
+    if (stress) set_checkerboard(f, mean_stress_checkerboard, v, v.mean_stress);
     std::vector<double> a(n);
-    if (!s.solid.sigma.empty()) {
-      for (std::size_t p = 0; p < n; ++p) a[p] = mean_stress(s.solid.sigma[p]);  // Pa, effective, compression positive
-      set_checkerboard(f, mean_stress_checkerboard, v, a);
-    }
     for (std::size_t p = 0; p < n; ++p) a[p] = s.solid.V[p] / s.solid.V0[p];
-    const Range J = range(a);
-    f.value[J_min] = J.min, f.where[J_min] = v.place(J.at_min);
-    f.value[J_max] = J.max, f.where[J_max] = v.place(J.at_max);
+    const auto [J_lo, J_hi] = v.range_over_ranks(a);
+    f.value[J_min] = J_lo.value, f.where[J_min] = J_lo.place;
+    f.value[J_max] = J_hi.value, f.where[J_max] = J_hi.place;
     if (s.solid.two_phase()) {
-      const Range n_range = range(s.solid.n);
-      f.value[porosity_min] = n_range.min, f.where[porosity_min] = v.place(n_range.at_min);
-      f.value[porosity_max] = n_range.max, f.where[porosity_max] = v.place(n_range.at_max);
+      const auto [n_lo, n_hi] = v.range_over_ranks(s.solid.n);
+      f.value[porosity_min] = n_lo.value, f.where[porosity_min] = n_lo.place;
+      f.value[porosity_max] = n_hi.value, f.where[porosity_max] = n_hi.place;
     } else {
       f.omitted[porosity_min] = f.omitted[porosity_max] = "a dry skeleton has no porosity";
     }
     if (soil_pressure) {
-      set_checkerboard(f, pressure_checkerboard, v, s.solid.p);
+      set_checkerboard(f, pressure_checkerboard, v, v.p);
       // Saturated points: those that carry pore fluid (m_f > 0 where the set has fluid masses).
       std::vector<double> pw;
       std::vector<long> index;
       for (std::size_t p = 0; p < n; ++p)
         if (s.solid.m_f.empty() || s.solid.m_f[p] > 0.0) pw.push_back(s.solid.p[p]), index.push_back(static_cast<long>(p));
-      const Cavitation c = cavitation(pw);
-      set_cavitation(f, pw, c.lowest >= 0 ? v.place(index[c.lowest]) : Place{});
+      set_cavitation(f, v, pw, index);
     }
     add_motion(v, elapsed, motion);
   } else {
@@ -174,17 +367,18 @@ FrameIndicators measure(const State<Dim>& s, const GridFields* grid, const Energ
     f.omitted[porosity_min] = f.omitted[porosity_max] = "no solid points";
   }
 
-  if (s.fluid.size() > 0) {
-    const SetView<Dim> w(s.fluid, "water");
+  if (water_points_n > 0) {
+    const SetView<Dim> w(s.fluid, "water", water_points_n, false, water_points);
     if (water_points) {
-      set_checkerboard(f, pressure_checkerboard, w, s.fluid.p);
-      const Cavitation c = cavitation(s.fluid.p);
-      set_cavitation(f, s.fluid.p, w.place(c.lowest));
+      set_checkerboard(f, pressure_checkerboard, w, w.p);
+      std::vector<long> index(s.fluid.size());
+      std::iota(index.begin(), index.end(), 0L);
+      set_cavitation(f, w, std::span<const double>(w.p.data(), w.owned), index);
     }
     add_motion(w, elapsed, motion);
   }
 
-  if (on_grid) {
+  if (on_grid && grid_p && grid_phi) {  // the rank that holds the grid fields (rank 0)
     // The water's nodes (phi >= 1/2) of the lattice; radius 1.6 node spacings.
     std::vector<Point> x;
     std::vector<double> p;
@@ -224,7 +418,7 @@ FrameIndicators measure(const State<Dim>& s, const GridFields* grid, const Energ
   // The at-rest speed over the run's velocity scale: the fastest point's speed, the largest mean
   // displacement rate since the start, and the gravity wave speed sqrt(|g| L) over the sets'
   // largest extent L, whichever is largest.
-  if (s.solid.size() + s.fluid.size() == 0) {
+  if (solid_points + water_points_n == 0) {
     f.omitted[spurious_velocity] = "no points";
   } else if (motion.speed >= 0.0) {
     const double g = std::sqrt(gravity[0] * gravity[0] + gravity[1] * gravity[1] + gravity[2] * gravity[2]);

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -87,6 +88,10 @@ struct Energies {
 template <int Dim>
 FrameIndicators measure(const State<Dim>& s, const GridFields* grid, const Energies& e,
                         const std::array<double, 3>& gravity, double elapsed);
+
+/// The typical spacing (indicators.hpp's typical_spacing) of a set the ranks hold in shares
+/// (`V0`: this rank's, `whole`: the set's size over the ranks), the same value. Collective.
+double typical_spacing_over_ranks(std::span<const double> V0, int dim, long whole);
 
 /// The run's record of its indicators.
 class StabilityReport {

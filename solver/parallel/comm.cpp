@@ -4,6 +4,7 @@
 #include <vtkMPIController.h>
 #include <vtkSmartPointer.h>
 
+#include <algorithm>
 #include <cstdlib>
 
 namespace swmpm::parallel {
@@ -154,6 +155,24 @@ std::vector<std::vector<char>> all_gather(const std::vector<char>& bytes) {
   std::vector<std::vector<char>> out;
   for (std::size_t r = 0; r < counts.size(); ++r) out.emplace_back(all.begin() + displs[r], all.begin() + displs[r + 1]);
   return out;
+}
+
+std::vector<std::vector<char>> all_to_all(const std::vector<std::vector<char>>& to) {
+  if (to.size() != static_cast<std::size_t>(g_ranks)) throw std::logic_error("all_to_all: one list per rank expected");
+  if (!g_started) return to;
+  Timed t;
+  const std::size_t R = to.size();
+  std::vector<int> send_n(R), recv_n(R), send_at(R + 1, 0), recv_at(R + 1, 0);
+  for (std::size_t r = 0; r < R; ++r) send_n[r] = static_cast<int>(to[r].size());
+  MPI_Alltoall(send_n.data(), 1, MPI_INT, recv_n.data(), 1, MPI_INT, world());
+  for (std::size_t r = 0; r < R; ++r) send_at[r + 1] = send_at[r] + send_n[r], recv_at[r + 1] = recv_at[r] + recv_n[r];
+  std::vector<char> out(static_cast<std::size_t>(send_at[R])), in(static_cast<std::size_t>(recv_at[R]));
+  for (std::size_t r = 0; r < R; ++r) std::copy(to[r].begin(), to[r].end(), out.begin() + send_at[r]);
+  MPI_Alltoallv(out.data(), send_n.data(), send_at.data(), MPI_CHAR, in.data(), recv_n.data(), recv_at.data(), MPI_CHAR,
+                world());
+  std::vector<std::vector<char>> from(R);
+  for (std::size_t r = 0; r < R; ++r) from[r].assign(in.begin() + recv_at[r], in.begin() + recv_at[r + 1]);
+  return from;
 }
 
 void barrier() {

@@ -53,6 +53,9 @@ std::vector<std::int64_t> broadcast(const std::vector<std::int64_t>& v);
 std::vector<std::vector<char>> gather_to_root(const std::vector<char>& bytes);
 /// Bytes from every rank to every rank, in rank order.
 std::vector<std::vector<char>> all_gather(const std::vector<char>& bytes);
+/// Bytes to each rank (`to[r]` for rank r; this rank's own entry comes back as it is), in one
+/// all-to-all: what each rank sent this one, in rank order.
+std::vector<std::vector<char>> all_to_all(const std::vector<std::vector<char>>& to);
 void barrier();
 
 /// Seconds of wall time this rank spent in communication (collectives, ghost exchange, migration).

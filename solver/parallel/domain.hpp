@@ -104,8 +104,8 @@ bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const Fi
                     std::vector<std::max_align_t>& scratch);
 
 /// Every rank's particles of a set, on rank 0, in key order: the one-rank run's set in its storage
-/// order (the others get an empty set). Collective. For what is measured once per frame over the
-/// whole set (the stability indicators): it costs rank 0 the memory of the whole set.
+/// order (the others get an empty set). Collective. It costs rank 0 the memory of the whole set:
+/// for the tests and for what is built once from the whole set (the double-point tie table).
 template <int Dim>
 ParticleSet<Dim> gather_set(const ParticleSet<Dim>& ps);
 

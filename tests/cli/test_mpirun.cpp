@@ -145,7 +145,42 @@ Pair solve_both(const nlohmann::json& scene, const std::string& name, int ranks)
   return p;
 }
 
-/// Every frame of `many` equals the one-rank frame bit for bit; monitors.csv is the same file.
+/// run.json's stability record of `many` (each rank measures its share of the sets with copies of
+/// the points near it) against the one-rank run's: every indicator of every frame within
+/// `tolerance` of its value (relative); with `places`, each worst value found at the same point
+/// (position included).
+/// A bitwise run differs only in the order of the sums over the ranks (the checkerboard's sum of
+/// squares, the energies): round-off.
+void expect_same_stability(const Pair& p, double tolerance, bool places) {
+  const auto one = load_json(p.one + "/run.json")["stability"], many = load_json(p.many + "/run.json")["stability"];
+  ASSERT_EQ(one["frames"]["time"].size(), many["frames"]["time"].size());
+  EXPECT_GT(one["frames"]["time"].size(), 1u);
+  for (const auto& [key, values] : one["frames"].items()) {
+    const auto& other = many["frames"][key];
+    ASSERT_EQ(values.size(), other.size()) << key;
+    for (std::size_t k = 0; k < values.size(); ++k) {
+      EXPECT_EQ(values[k].is_null(), other[k].is_null()) << key << ", frame " << k;
+      if (values[k].is_null() || other[k].is_null()) continue;
+      const double a = values[k], b = other[k];
+      EXPECT_LE(std::abs(a - b), tolerance * std::abs(a) + 1e-300) << key << ", frame " << k;
+    }
+  }
+  for (const auto& [key, worst] : one["worst"].items()) {
+    const auto& other = many["worst"][key];
+    EXPECT_EQ(worst.is_null(), other.is_null()) << key;
+    if (worst.is_null() || other.is_null()) continue;
+    // (A run that follows to a tolerance may find a worst value at a mirror point of a symmetric
+    // body: equal values to round-off.)
+    if (places) {
+      EXPECT_EQ(worst["where"].dump(), other["where"].dump()) << key;
+    }
+    EXPECT_EQ(worst["crossed_frames"], other["crossed_frames"]) << key;
+  }
+  EXPECT_EQ(one["warnings"].size(), many["warnings"].size());
+}
+
+/// Every frame of `many` equals the one-rank frame bit for bit; monitors.csv is the same file;
+/// the stability indicators are the one-rank run's to round-off, found at the same points.
 void expect_same_answers(const Pair& p) {
   const auto one = scene::read_pvd(p.one + "/output/results.pvd");
   const auto many = scene::read_pvd(p.many + "/output/results.pvd");
@@ -165,6 +200,7 @@ void expect_same_answers(const Pair& p) {
     EXPECT_EQ(differing_values(a, b), 0) << "frame " << k << " (t = " << one[k].time << " s)";
   }
   EXPECT_EQ(read_text(p.one + "/monitors.csv"), read_text(p.many + "/monitors.csv"));
+  expect_same_stability(p, 1e-12, true);
 }
 
 TEST(Mpirun, DryCollapseOnTwoRanksIsBitwiseTheOneRankRun2D) {
@@ -443,6 +479,7 @@ double expect_close_answers(const Pair& p, double h, double tolerance) {
     EXPECT_LE(e, tolerance) << "frame " << k << " (t = " << one[k].time << " s): " << where;
     worst = std::max(worst, e);
   }
+  expect_same_stability(p, 1e-4, false);
   return worst;
 }
 
