@@ -100,7 +100,7 @@ class Log {
 /// ledger) and keeps preprocess's scene.json and particles/.
 bool solve_output(const std::string& relative) {
   return relative == "run.json" || relative == "log.txt" || relative == "monitors.csv" || relative == "report.md" || relative == "report.html" ||
-         relative == "checkpoint.bin" ||
+         relative == "checkpoint.bin" || relative.rfind("checkpoint/", 0) == 0 ||
          relative.rfind("output/", 0) == 0 || relative.rfind("plots/", 0) == 0;
 }
 
@@ -813,37 +813,47 @@ class Runner {
     f_->save(c);
   }
 
-  /// mpirun: the snapshot of the whole run on rank 0, as the one-rank run takes it: each set
-  /// gathered in key order (the one-rank storage order), each particle order of the formulation's
-  /// state (Checkpoint::put_order) as positions in its gathered set. The other ranks get the
-  /// header only. Collective.
-  void take_whole_snapshot(Checkpoint& c) const {
-    Checkpoint mine;  // the formulation's state only: the sets are gathered below
+  /// mpirun: the restart file's parts, nothing gathered: `piece`, this rank's particle sets (in
+  /// key order, their keys among their fields) and each particle order of the formulation's state
+  /// (Checkpoint::put_order) as indices into them; `c` (rank 0 writes it), the header and the
+  /// formulation's global arrays (the same on every rank). Checkpoint::assembled puts them
+  /// together as the one-rank run's snapshot.
+  void take_pieces(Checkpoint& c, Checkpoint& piece) const {
+    Checkpoint mine;
     f_->save(mine);
-    const ParticleSet<Dim> solid = parallel::gather_set(state_.solid), fluid = parallel::gather_set(state_.fluid);
     c.clear();
+    piece.clear();
     c.header = mine.header;
     c.header.erase("particle_orders");
     c.header.erase("global_arrays");
     c.header["step"] = state_.step;
     c.header["time"] = state_.time;
-    save_set(c, "solid", solid);
-    save_set(c, "fluid", fluid);
+    save_set(piece, "solid", state_.solid);
+    save_set(piece, "fluid", state_.fluid);
     const auto orders = mine.header.value("particle_orders", nlohmann::ordered_json::object());
     const auto global = mine.header.value("global_arrays", nlohmann::ordered_json::object());
     for (const auto& name : mine.names()) {
-      if (global.contains(name)) {  // the same on every rank
+      if (global.contains(name)) {
         c.copy_array(mine, name);
         c.header["global_arrays"][name] = true;
-        continue;
+      } else if (orders.contains(name)) {
+        piece.copy_array(mine, name);
+        piece.header["particle_orders"][name] = orders.at(name);
+      } else {  // grid arrays of a formulation: not on several ranks yet
+        throw std::logic_error(f_->name() + ": its restart array " + name + " is neither particles' nor global");
       }
-      if (!orders.contains(name))  // grid arrays of a formulation: not on several ranks yet
-        throw std::logic_error(f_->name() + ": its restart array " + name + " does not gather across ranks yet");
-      const bool water = orders.at(name) == "fluid";
-      std::vector<int> order;
-      mine.get(name, order);
-      c.put_order(name, orders.at(name), parallel::gather_order(order, water ? state_.fluid : state_.solid, (water ? fluid : solid).key));
     }
+  }
+
+  /// The index of the particle key among a set's fields (ParticleSet::for_each_field's order).
+  static int key_field() {
+    ParticleSet<Dim> ps;
+    int k = 0, at = -1;
+    ps.for_each_field([&](auto& f) {
+      if (static_cast<const void*>(&f) == static_cast<const void*>(&ps.key)) at = k;
+      ++k;
+    });
+    return at;
   }
 
   /// Puts a snapshot's particle sets and formulation state in place (the clock is the caller's).
@@ -873,12 +883,16 @@ class Runner {
   }
 
   /// RUN_DIR/checkpoint.bin (solver/output/checkpoint.hpp), replaced atomically.
-  /// Under mpirun rank 0 writes it, holding the whole run as one rank would (take_whole_snapshot),
-  /// so that it resumes on any number of ranks.
+  /// Under mpirun in pieces, so that no rank holds more than its own particles: each rank writes
+  /// RUN_DIR/checkpoint/piece-<generation>-<rank>.bin (take_pieces), then rank 0 checkpoint.bin,
+  /// which names them; the pieces of the checkpoint before are removed only after that, so a kill
+  /// at any moment leaves one whole checkpoint. A resume on any number of ranks puts the pieces
+  /// together (Checkpoint::assembled).
   void write_checkpoint() {
     const auto start = std::chrono::steady_clock::now();
-    Checkpoint c;
-    if (parallel::distributed()) take_whole_snapshot(c);
+    Checkpoint c, piece;
+    const bool pieces = parallel::distributed();
+    if (pieces) take_pieces(c, piece);
     else take_snapshot(c);
     c.header["software_version"] = version;
     c.header["git_hash"] = git_hash;
@@ -895,20 +909,51 @@ class Runner {
     loop["frames"] = frames;
     loop["monitor_bytes"] = monitors_->bytes();
     loop["stability"] = stability_.json();
+    loop["checkpoint_generation"] = ++checkpoint_generation_;
     c.header["loop"] = loop;
-    // Under mpirun rank 0 writes; a failure stops every rank in order (as a frame's piece does).
+    std::vector<std::string> names;
+    if (pieces) {
+      const int R = parallel::ranks();
+      for (int r = 0; r < R; ++r)
+        names.push_back("checkpoint/piece-" + std::to_string(checkpoint_generation_) + "-" + std::to_string(r) + ".bin");
+      c.header["pieces"] = {{"generation", checkpoint_generation_},
+                            {"key_field", key_field()},
+                            {"files", names},
+                            {"solid", parallel::all_gather(static_cast<long>(state_.solid.size()))},
+                            {"fluid", parallel::all_gather(static_cast<long>(state_.fluid.size()))}};
+      piece.header["generation"] = checkpoint_generation_;
+      piece.header["rank"] = parallel::rank();
+      piece.header["step"] = state_.step;
+      // Rank 0 claims every piece's name on the ledger before any rank writes one; a rank that
+      // cannot write its piece fails the checkpoint on every rank, and checkpoint.bin stays the last.
+      if (root())
+        for (const auto& n : names) run_dir_.claim(n);
+      parallel::barrier();
+      const std::string mine = names[static_cast<std::size_t>(parallel::rank())];
+      write_on_every_rank((dir_ / mine).string(), "another rank could not write its piece",
+                          [&] { piece.write(dir_ / mine); });
+    }
+    // Rank 0 writes; a failure stops every rank in order (as a frame's piece does).
     write_on_every_rank((dir_ / "checkpoint.bin").string(), "rank 0 could not write it", [&] {
       if (!root()) return;
       run_dir_.claim("checkpoint.bin");
       c.write(dir_ / "checkpoint.bin");
     });
+    // The checkpoint before is replaced: its pieces go.
+    if (root())
+      for (const auto& old : pieces_before_)
+        if (std::find(names.begin(), names.end(), old) == names.end()) {
+          std::error_code ec;
+          fs::remove(dir_ / old, ec);
+        }
+    pieces_before_ = names;
     checkpoint_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++checkpoints_;
   }
 
   /// The checkpoint to resume from, refused (CheckpointError, exit 2) when another version wrote
   /// it or the scene changed since: the message says what differs.
-  Checkpoint read_checkpoint(const std::string& formulation) const {
+  Checkpoint read_checkpoint(const std::string& formulation) {
     const fs::path file = dir_ / "checkpoint.bin";
     Checkpoint c = Checkpoint::read(file);
     const std::string theirs = c.header.value("software_version", "?") + " (" + c.header.value("git_hash", "?") + ")";
@@ -934,7 +979,11 @@ class Runner {
     if (c.header.value("formulation", "") != formulation || c.header.value("dimension", 0) != Dim)
       throw CheckpointError(file.string() + ": written by formulation " + c.header.value("formulation", "?") +
                             ", the scene's is " + formulation);
-    return c;
+    if (!c.header.contains("pieces")) return c;
+    // Written by several ranks: its pieces put together (every rank holds the whole run for a
+    // moment, as it holds the initial particles; the formulation's distribute keeps its share).
+    pieces_before_ = c.header.at("pieces").at("files").get<std::vector<std::string>>();
+    return c.assembled(dir_);
   }
 
   /// Puts the checkpoint's state in place of the run's initial one: the formulation (built from
@@ -955,6 +1004,7 @@ class Runner {
     guard_.restore(l);
     next_frame_ = l.at("next_frame"), next_monitor_ = l.at("next_monitor"), next_restart_ = l.at("next_restart");
     frame_count_ = l.at("frame_count");
+    checkpoint_generation_ = l.value("checkpoint_generation", 0L);
     if (l.contains("stability")) stability_.restore(l.at("stability"));
     frames_.clear();
     for (const auto& e : l.at("frames"))
@@ -1268,6 +1318,8 @@ class Runner {
   double frame_seconds_ = 0.0;      // wall time spent writing frames (part of loop_seconds)
   double checkpoint_seconds_ = 0.0;  // wall time spent writing restart checkpoints (part of loop_seconds)
   int checkpoints_ = 0;
+  long checkpoint_generation_ = 0;          // checkpoints written by the run, resumes included
+  std::vector<std::string> pieces_before_;  // the pieces of the last checkpoint (mpirun), relative
   bool all_ranks_failed_ = false;  // mpirun: a write error every rank knows of (write_frame)
   double last_good_frame_time_ = 0.0;
 };

@@ -3,7 +3,10 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cstring>
+#include <map>
 #include <fstream>
 
 #include "scene/files.hpp"
@@ -99,6 +102,105 @@ Checkpoint Checkpoint::read(const std::filesystem::path& path) {
   }
   c.header.erase("arrays");
   return c;
+}
+
+
+Checkpoint Checkpoint::assembled(const std::filesystem::path& dir) const {
+  const auto& pieces = header.at("pieces");
+  const auto files = pieces.at("files").get<std::vector<std::string>>();
+  const long generation = pieces.at("generation").get<long>();
+  std::vector<Checkpoint> parts;
+  for (std::size_t r = 0; r < files.size(); ++r) {
+    std::error_code ec;
+    if (!std::filesystem::exists(dir / files[r], ec))
+      throw CheckpointError((dir / files[r]).string() + ": missing; " + source_.string() + " was written in " +
+                            std::to_string(files.size()) + " pieces, one per rank, and this is rank " + std::to_string(r) +
+                            "'s (run the solve again without --resume)");
+    parts.push_back(read(dir / files[r]));
+    const auto& h = parts.back().header;
+    if (h.value("generation", -1L) != generation || h.value("rank", -1L) != static_cast<long>(r))
+      throw CheckpointError((dir / files[r]).string() + ": a piece of another checkpoint than " + source_.string() +
+                            " (generation " + std::to_string(h.value("generation", -1L)) + ", rank " +
+                            std::to_string(h.value("rank", -1L)) + "; expected " + std::to_string(generation) + ", " +
+                            std::to_string(r) + ")");
+  }
+  Checkpoint whole;
+  whole.source_ = source_;
+  whole.header = header;
+  whole.header.erase("pieces");
+  for (const auto& sec : sections_) whole.put_bytes(sec.name, sec.element_bytes, sec.count, data_.data() + sec.offset);
+  const std::string key_field = std::to_string(pieces.at("key_field").get<int>());
+  // Per set: where each part's particle i went in the whole set.
+  std::map<std::string, std::vector<std::vector<int>>> position;
+  for (const std::string set : {"solid", "fluid"}) {
+    struct Entry {
+      std::int64_t key;
+      std::size_t part, index;
+    };
+    std::vector<Entry> entries;
+    std::vector<std::size_t> count(parts.size());
+    for (std::size_t r = 0; r < parts.size(); ++r) {
+      std::vector<std::int64_t> keys;
+      parts[r].get(set + "/" + key_field, keys);
+      count[r] = keys.size();
+      for (std::size_t i = 0; i < keys.size(); ++i) entries.push_back({keys[i], r, i});
+    }
+    std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.key < b.key; });
+    for (std::size_t j = 1; j < entries.size(); ++j)
+      if (entries[j].key == entries[j - 1].key)
+        throw CheckpointError(source_.string() + ": two pieces hold " + set + " particle " + std::to_string(entries[j].key));
+    auto& where = position[set];
+    where.resize(parts.size());
+    for (std::size_t r = 0; r < parts.size(); ++r) where[r].assign(count[r], -1);
+    for (std::size_t j = 0; j < entries.size(); ++j) where[entries[j].part][entries[j].index] = static_cast<int>(j);
+    // Each field: carried where a piece holds particles (a piece without any carries none).
+    for (int k = 0; !parts.empty() && parts[0].has(set + "/" + std::to_string(k)); ++k) {
+      const std::string name = set + "/" + std::to_string(k);
+      std::vector<const Section*> sec(parts.size());
+      bool active = false;
+      for (std::size_t r = 0; r < parts.size(); ++r) {
+        for (const auto& s : parts[r].sections_)
+          if (s.name == name) sec[r] = &s;
+        if (!sec[r]) throw CheckpointError((dir / files[r]).string() + ": no array \"" + name + "\"");
+        active = active || sec[r]->count > 0;
+      }
+      const std::size_t bytes = sec[0]->element_bytes;
+      if (!active) {
+        whole.put_bytes(name, bytes, 0, nullptr);
+        continue;
+      }
+      for (std::size_t r = 0; r < parts.size(); ++r)
+        if (count[r] > 0 && (sec[r]->count != count[r] || sec[r]->element_bytes != bytes))
+          throw CheckpointError((dir / files[r]).string() + ": array \"" + name + "\" holds " + std::to_string(sec[r]->count) +
+                                " values for " + std::to_string(count[r]) + " particles");
+      std::vector<char> all(entries.size() * bytes);
+      for (std::size_t j = 0; j < entries.size(); ++j) {
+        const Entry& e = entries[j];
+        std::memcpy(all.data() + j * bytes, parts[e.part].data_.data() + sec[e.part]->offset + e.index * bytes, bytes);
+      }
+      whole.put_bytes(name, bytes, entries.size(), all.data());
+    }
+  }
+  // The particle orders: each piece's entries in piece order, as positions in the whole set.
+  const auto orders = parts.empty() ? nlohmann::ordered_json::object()
+                                    : parts[0].header.value("particle_orders", nlohmann::ordered_json::object());
+  for (const auto& [name, set_json] : orders.items()) {
+    const std::string set = set_json.get<std::string>();
+    std::vector<int> order;
+    for (std::size_t r = 0; r < parts.size(); ++r) {
+      std::vector<int> mine;
+      parts[r].get(name, mine);
+      const auto& where = position.at(set)[r];
+      for (int i : mine) {
+        if (i < 0 || static_cast<std::size_t>(i) >= where.size())
+          throw CheckpointError((dir / files[r]).string() + ": order \"" + name + "\" indexes particle " + std::to_string(i) +
+                                " of " + std::to_string(where.size()));
+        order.push_back(where[static_cast<std::size_t>(i)]);
+      }
+    }
+    whole.put_order(name, set, order);
+  }
+  return whole;
 }
 
 }  // namespace swmpm

@@ -12,7 +12,9 @@
 //               header: per-particle fields "<set>/<field>" (solid/x, fluid/V, ...) as stored in
 //               ParticleSet, and the formulation's own arrays
 // The file is replaced atomically (files::write_atomically), so a kill while it is written
-// leaves the previous checkpoint whole.
+// leaves the previous checkpoint whole. Under mpirun each rank writes its particles in a piece
+// of the same layout (RUN_DIR/checkpoint/piece-<generation>-<rank>.bin) and checkpoint.bin names
+// them (header "pieces"); assembled() puts them together (solver/run.cpp, write_checkpoint).
 #pragma once
 
 #include <cstdint>
@@ -83,6 +85,14 @@ class Checkpoint {
 
   void write(const std::filesystem::path& path) const;  // atomically; throws files::WriteError
   static Checkpoint read(const std::filesystem::path& path);  // throws CheckpointError
+
+  /// A checkpoint written in pieces (mpirun: checkpoint.bin with the loop's state, the global
+  /// arrays and header "pieces"; each rank's particles in its own file, named there, relative to
+  /// `dir`), put together as one rank writes it: each set's fields in key order (the one-rank
+  /// storage order; "pieces"/"key_field" names the key's field), each particle order as positions
+  /// in its whole set (each piece's entries in piece order, as parallel::gather_order gives them).
+  /// Throws CheckpointError when a piece is missing, damaged or of another checkpoint.
+  Checkpoint assembled(const std::filesystem::path& dir) const;
 
  private:
   struct Section {

@@ -637,10 +637,25 @@ TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
   const auto reference = last_frame(one);
   const std::string monitors = read_text(one + "/monitors.csv");
 
-  // Two ranks to the end: the last checkpoint (t = 0.275 s) holds the whole run, rank 0 wrote it.
+  // Two ranks to the end: the last checkpoint (t = 0.275 s) is in pieces, each rank's particles
+  // in its own file (nothing gathered), checkpoint.bin the loop's state and the list; the first
+  // checkpoint's pieces were removed once the second was in place.
   const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
   ASSERT_EQ(two.status, 0) << two.err;
   EXPECT_EQ(load_json(run + "/run.json")["checkpoints"], 2);
+  for (const char* piece : {"/checkpoint/piece-2-0.bin", "/checkpoint/piece-2-1.bin"}) {
+    ASSERT_TRUE(fs::exists(run + piece)) << piece;
+    EXPECT_GT(fs::file_size(run + piece), 5 * fs::file_size(run + "/checkpoint.bin")) << piece;  // 54-65 kB, 5.4 kB
+  }
+  EXPECT_FALSE(fs::exists(run + "/checkpoint/piece-1-0.bin"));
+  EXPECT_FALSE(fs::exists(run + "/checkpoint/piece-1-1.bin"));
+  // A missing piece is named, and nothing is written (exit 2).
+  fs::rename(run + "/checkpoint/piece-2-1.bin", run + "/piece.aside");
+  const Result missing = swmpm_cmd("solve " + run + " --resume -q --threads 1", dir);
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_NE(missing.err.find("piece-2-1.bin: missing"), std::string::npos) << missing.err;
+  EXPECT_EQ(load_json(run + "/run.json")["ranks"], 2);
+  fs::rename(run + "/piece.aside", run + "/checkpoint/piece-2-1.bin");
   // 2 -> 1: the one-rank resume of the two ranks' checkpoint ends on the one-rank run's answers.
   const Result r1 = swmpm_cmd("solve " + run + " --resume -q --threads 1", dir);
   ASSERT_EQ(r1.status, 0) << r1.err;
