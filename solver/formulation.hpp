@@ -85,6 +85,10 @@ struct State {
   scene::PointCloud phase_field;
   double time = 0.0;
   long step = 0;
+  /// mpirun: each rank holds a share of the sets (any slice of them, with their keys; a resume from
+  /// a checkpoint's pieces) rather than the whole; the formulation's distribute then moves the
+  /// particles to their owners (parallel::distribute) and clears it.
+  bool shares = false;
   Health health;
   /// Current index of each particle id. Formulations may reorder particles for memory locality;
   /// ids are stable, so monitors and loads refer to particles by id through this table.

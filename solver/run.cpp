@@ -845,6 +845,14 @@ class Runner {
     }
   }
 
+  /// The bytes of an element of each of a set's fields (ParticleSet::for_each_field's order).
+  static std::vector<std::size_t> field_bytes(const ParticleSet<Dim>& ps) {
+    std::vector<std::size_t> bytes;
+    const_cast<ParticleSet<Dim>&>(ps).for_each_field(
+        [&](auto& f) { bytes.push_back(sizeof(typename std::decay_t<decltype(f)>::value_type)); });
+    return bytes;
+  }
+
   /// The index of the particle key among a set's fields (ParticleSet::for_each_field's order).
   static int key_field() {
     ParticleSet<Dim> ps;
@@ -918,6 +926,8 @@ class Runner {
         names.push_back("checkpoint/piece-" + std::to_string(checkpoint_generation_) + "-" + std::to_string(r) + ".bin");
       c.header["pieces"] = {{"generation", checkpoint_generation_},
                             {"key_field", key_field()},
+                            {"fields", {{"solid", field_bytes(state_.solid)}, {"fluid", field_bytes(state_.fluid)}}},
+                            {"orders", piece.header.value("particle_orders", Json::object())},
                             {"files", names},
                             {"solid", parallel::all_gather(static_cast<long>(state_.solid.size()))},
                             {"fluid", parallel::all_gather(static_cast<long>(state_.fluid.size()))}};
@@ -979,11 +989,15 @@ class Runner {
     if (c.header.value("formulation", "") != formulation || c.header.value("dimension", 0) != Dim)
       throw CheckpointError(file.string() + ": written by formulation " + c.header.value("formulation", "?") +
                             ", the scene's is " + formulation);
-    if (!c.header.contains("pieces")) return c;
-    // Written by several ranks: its pieces put together (every rank holds the whole run for a
-    // moment, as it holds the initial particles; the formulation's distribute keeps its share).
+    const std::size_t R = c.pieces();
+    if (R == 0) return c;
+    // Written by several ranks in pieces: rank m of M reads pieces [m R / M, (m + 1) R / M) (one
+    // rank all of them: the whole snapshot), a share of the run that the formulation's distribute
+    // sends to the particles' owners (State::shares).
     pieces_before_ = c.header.at("pieces").at("files").get<std::vector<std::string>>();
-    return c.assembled(dir_);
+    const std::size_t M = static_cast<std::size_t>(parallel::ranks()), m = static_cast<std::size_t>(parallel::rank());
+    resume_shares_ = M > 1;
+    return c.assembled(dir_, m * R / M, (m + 1) * R / M);
   }
 
   /// Puts the checkpoint's state in place of the run's initial one: the formulation (built from
@@ -1000,7 +1014,10 @@ class Runner {
     state_.step = c.header.at("step");
     state_.time = c.header.at("time");
     restore_snapshot(c);
-    f_->distribute(state_);  // mpirun: each rank keeps its share of the checkpoint's particles
+    // mpirun: each rank keeps its share of the checkpoint's particles (of a whole checkpoint), or
+    // sends the pieces it read to their owners (of one in pieces).
+    state_.shares = resume_shares_;
+    f_->distribute(state_);
     guard_.restore(l);
     next_frame_ = l.at("next_frame"), next_monitor_ = l.at("next_monitor"), next_restart_ = l.at("next_restart");
     frame_count_ = l.at("frame_count");
@@ -1320,6 +1337,7 @@ class Runner {
   int checkpoints_ = 0;
   long checkpoint_generation_ = 0;          // checkpoints written by the run, resumes included
   std::vector<std::string> pieces_before_;  // the pieces of the last checkpoint (mpirun), relative
+  bool resume_shares_ = false;              // the checkpoint read is this rank's pieces, not the whole
   bool all_ranks_failed_ = false;  // mpirun: a write error every rank knows of (write_frame)
   double last_good_frame_time_ = 0.0;
 };

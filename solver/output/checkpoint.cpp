@@ -105,24 +105,28 @@ Checkpoint Checkpoint::read(const std::filesystem::path& path) {
 }
 
 
-Checkpoint Checkpoint::assembled(const std::filesystem::path& dir) const {
+Checkpoint Checkpoint::assembled(const std::filesystem::path& dir, std::size_t first, std::size_t last) const {
   const auto& pieces = header.at("pieces");
-  const auto files = pieces.at("files").get<std::vector<std::string>>();
+  const auto all_files = pieces.at("files").get<std::vector<std::string>>();
   const long generation = pieces.at("generation").get<long>();
+  last = std::min(last, all_files.size());
+  first = std::min(first, last);
+  const std::vector<std::string> files(all_files.begin() + static_cast<std::ptrdiff_t>(first),
+                                       all_files.begin() + static_cast<std::ptrdiff_t>(last));
   std::vector<Checkpoint> parts;
   for (std::size_t r = 0; r < files.size(); ++r) {
     std::error_code ec;
     if (!std::filesystem::exists(dir / files[r], ec))
       throw CheckpointError((dir / files[r]).string() + ": missing; " + source_.string() + " was written in " +
-                            std::to_string(files.size()) + " pieces, one per rank, and this is rank " + std::to_string(r) +
-                            "'s (run the solve again without --resume)");
+                            std::to_string(all_files.size()) + " pieces, one per rank, and this is rank " +
+                            std::to_string(first + r) + "'s (run the solve again without --resume)");
     parts.push_back(read(dir / files[r]));
     const auto& h = parts.back().header;
-    if (h.value("generation", -1L) != generation || h.value("rank", -1L) != static_cast<long>(r))
+    if (h.value("generation", -1L) != generation || h.value("rank", -1L) != static_cast<long>(first + r))
       throw CheckpointError((dir / files[r]).string() + ": a piece of another checkpoint than " + source_.string() +
                             " (generation " + std::to_string(h.value("generation", -1L)) + ", rank " +
                             std::to_string(h.value("rank", -1L)) + "; expected " + std::to_string(generation) + ", " +
-                            std::to_string(r) + ")");
+                            std::to_string(first + r) + ")");
   }
   Checkpoint whole;
   whole.source_ = source_;
@@ -130,6 +134,14 @@ Checkpoint Checkpoint::assembled(const std::filesystem::path& dir) const {
   whole.header.erase("pieces");
   for (const auto& sec : sections_) whole.put_bytes(sec.name, sec.element_bytes, sec.count, data_.data() + sec.offset);
   const std::string key_field = std::to_string(pieces.at("key_field").get<int>());
+  if (parts.empty()) {  // a rank with no piece to read (more ranks than pieces): empty sets
+    for (const std::string set : {"solid", "fluid"}) {
+      const auto bytes = pieces.at("fields").at(set).get<std::vector<std::size_t>>();
+      for (std::size_t k = 0; k < bytes.size(); ++k) whole.put_bytes(set + "/" + std::to_string(k), bytes[k], 0, nullptr);
+    }
+    for (const auto& [name, set] : pieces.at("orders").items()) whole.put_order(name, set.get<std::string>(), {});
+    return whole;
+  }
   // Per set: where each part's particle i went in the whole set.
   std::map<std::string, std::vector<std::vector<int>>> position;
   for (const std::string set : {"solid", "fluid"}) {

@@ -88,11 +88,15 @@ class Checkpoint {
 
   /// A checkpoint written in pieces (mpirun: checkpoint.bin with the loop's state, the global
   /// arrays and header "pieces"; each rank's particles in its own file, named there, relative to
-  /// `dir`), put together as one rank writes it: each set's fields in key order (the one-rank
-  /// storage order; "pieces"/"key_field" names the key's field), each particle order as positions
-  /// in its whole set (each piece's entries in piece order, as parallel::gather_order gives them).
-  /// Throws CheckpointError when a piece is missing, damaged or of another checkpoint.
-  Checkpoint assembled(const std::filesystem::path& dir) const;
+  /// `dir`): pieces [first, last) put together, each set's fields in key order ("pieces"/
+  /// "key_field" names the key's field), each particle order as positions in that set (each
+  /// piece's entries in piece order, as parallel::gather_order gives them). All pieces: the
+  /// snapshot one rank writes (key order is the one-rank storage order); none: empty sets and
+  /// orders ("pieces"/"fields" and "orders" give their layout). Throws CheckpointError
+  /// when a piece is missing, damaged or of another checkpoint.
+  Checkpoint assembled(const std::filesystem::path& dir, std::size_t first, std::size_t last) const;
+  /// The number of pieces (0: written whole, by one rank).
+  std::size_t pieces() const { return header.contains("pieces") ? header["pieces"]["files"].size() : 0; }
 
  private:
   struct Section {

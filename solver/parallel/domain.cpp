@@ -415,6 +415,32 @@ std::vector<int> gather_order(const std::vector<int>& order, const ParticleSet<D
   return whole;
 }
 
+std::vector<std::int64_t> carry_values(const std::vector<std::int64_t>& keys, const std::vector<std::int64_t>& values,
+                                       const std::vector<int>& dest, const std::vector<std::int64_t>& keys_after) {
+  using Pair = std::array<std::int64_t, 2>;  // key, value
+  std::vector<std::vector<char>> to(static_cast<std::size_t>(ranks()));
+  for (std::size_t p = 0; p < keys.size(); ++p) {
+    const Pair kv{keys[p], values[p]};
+    auto& bytes = to[static_cast<std::size_t>(dest[p])];
+    bytes.insert(bytes.end(), reinterpret_cast<const char*>(kv.data()), reinterpret_cast<const char*>(kv.data()) + sizeof kv);
+  }
+  std::vector<Pair> got;
+  for (const auto& part : all_to_all(to))
+    for (std::size_t k = 0; k < part.size() / sizeof(Pair); ++k) {
+      Pair kv;
+      std::memcpy(kv.data(), part.data() + k * sizeof kv, sizeof kv);
+      got.push_back(kv);
+    }
+  std::sort(got.begin(), got.end());
+  if (got.size() != keys_after.size()) throw std::logic_error("carry_values: not one value per particle");
+  std::vector<std::int64_t> out(got.size());
+  for (std::size_t p = 0; p < got.size(); ++p) {
+    if (got[p][0] != keys_after[p]) throw std::logic_error("carry_values: a value without its particle");
+    out[p] = got[p][1];
+  }
+  return out;
+}
+
 template bool move_particles<2>(ParticleSet<2>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&);
 template bool move_particles<3>(ParticleSet<3>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&);
 template ParticleSet<2> gather_set<2>(const ParticleSet<2>&);

@@ -117,6 +117,12 @@ template <int Dim>
 std::vector<int> gather_order(const std::vector<int>& order, const ParticleSet<Dim>& ps,
                               const std::vector<std::int64_t>& whole_keys);
 
+/// Values that travel with particles: `values[p]` of this rank's particle p (key keys[p]) goes
+/// to rank dest[p], as move_particles sends the particle; returns the values of the particles this
+/// rank holds after the move, whose keys are `keys_after` (increasing). Collective.
+std::vector<std::int64_t> carry_values(const std::vector<std::int64_t>& keys, const std::vector<std::int64_t>& values,
+                                       const std::vector<int>& dest, const std::vector<std::int64_t>& keys_after);
+
 /// The inverse on a resume: an order of the whole set (positions in it) restricted to the
 /// particles this rank kept (`keys`: their positions in the whole set, increasing), as indices
 /// into the rank's set.
@@ -149,9 +155,15 @@ class Domain {
   /// for shape functions of `support` nodes per axis, with the cuts balanced on `sets` (the whole
   /// run's particles, which every rank holds at the start). Each rank then keeps its own particles
   /// (keys: their index in the whole set).
+  ///
+  /// With `carried`, each rank holds a share of the particles instead (any slice of the whole
+  /// sets, with their keys; a resume from a checkpoint's pieces): the cuts are balanced on the
+  /// ranks' counts summed, and every particle moves to its owner (move_particles: each set then in
+  /// key order). (*carried)[k] holds one value per particle of set k, which travels with it: on
+  /// return, one per particle of the rank's new set.
   template <class FirstNode>
   void distribute(const Grid<Dim>& g, int support, int axis, std::vector<ParticleSet<Dim>*> sets,
-                  FirstNode&& first_node) {
+                  FirstNode&& first_node, std::vector<std::vector<std::int64_t>>* carried = nullptr) {
     if (!active()) return;
     axis_ = axis;
     width_ = support;
@@ -169,7 +181,7 @@ class Domain {
     std::vector<std::vector<int>> stripe_of(sets.size());
     for (std::size_t k = 0; k < sets.size(); ++k) {
       ParticleSet<Dim>& ps = *sets[k];
-      layouts_.push_back(layout_of(ps));
+      layouts_.push_back(carried ? layout_over_ranks(ps) : layout_of(ps));
       stripe_of[k].resize(ps.size());
       for (std::size_t p = 0; p < ps.size(); ++p) {
         const int s = std::clamp(first_node(k, p) / width_, 0, stripes_ - 1);
@@ -177,9 +189,20 @@ class Domain {
         ++per_stripe[static_cast<std::size_t>(s)];
       }
     }
+    if (carried) sum(std::span<long>(per_stripe));
     set_cuts(balanced_cuts(per_stripe));
     for (std::size_t k = 0; k < sets.size(); ++k) {
       ParticleSet<Dim>& ps = *sets[k];
+      if (carried) {
+        if (ps.key.size() != ps.size() || (*carried)[k].size() != ps.size())
+          throw std::logic_error("Domain::distribute: a share without keys or carried values");
+        std::vector<int> dest(ps.size());
+        for (std::size_t p = 0; p < ps.size(); ++p) dest[p] = owner(stripe_of[k][p]);
+        const std::vector<std::int64_t> keys = ps.key;
+        move_particles(ps, dest, layouts_[k]);
+        (*carried)[k] = carry_values(keys, (*carried)[k], dest, ps.key);
+        continue;
+      }
       ps.key.resize(ps.size());
       std::iota(ps.key.begin(), ps.key.end(), std::int64_t{0});
       std::vector<int> keep;
@@ -333,6 +356,22 @@ class Domain {
     for (int r = 0; r < ranks(); ++r)
       for (int s = cuts_[static_cast<std::size_t>(r)]; s < cuts_[static_cast<std::size_t>(r) + 1]; ++s) owner_[static_cast<std::size_t>(s)] = r;
     exchange_ = std::make_unique<StripeExchange>(nodes_, axis_, width_, support_, cuts_);
+  }
+
+  /// layout_of over the ranks' shares: a field is carried if any rank's particles carry it (a
+  /// rank without particles has it sized to none). Collective.
+  static FieldBytes layout_over_ranks(ParticleSet<Dim>& ps) {
+    std::vector<long> active;
+    const std::size_t n = ps.size();
+    ps.for_each_field([&](auto& f) { active.push_back(n > 0 && f.size() == n); });
+    max(std::span<long>(active));
+    FieldBytes l;
+    for (long a : active) l.active.push_back(static_cast<char>(a));
+    l.active.back() = 1;  // the key
+    ps.for_each_field([&, k = std::size_t{0}](auto& f) mutable {
+      if (l.active[k++] && f.size() != n) f.resize(n);
+    });
+    return l;
   }
 
   static FieldBytes layout_of(ParticleSet<Dim>& ps) {

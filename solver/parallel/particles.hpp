@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,14 @@ int first_node(const Grid<Dim>& g, const Vec<Dim>& x, const Vec<Dim>& l, int axi
   return sd.base[axis];
 }
 
+/// The indices of `place` in increasing place (a schedule order from the places its particles had).
+inline std::vector<int> order_by(const std::vector<std::int64_t>& place) {
+  std::vector<int> order(place.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return place[static_cast<std::size_t>(a)] < place[static_cast<std::size_t>(b)]; });
+  return order;
+}
+
 /// A run's start under mpirun: every rank read all particles (a fresh run's, or a checkpoint's
 /// with the schedule order restored for the whole set); each keeps its own and the part of the
 /// order that indexes them, and the schedule learns the exchange. With `water_schedule` (the
@@ -47,14 +56,38 @@ void distribute(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedu
   if (water_schedule) sets.push_back(&st.fluid), schedules.push_back(water_schedule);
   std::vector<std::size_t> whole;
   for (const auto* ps : sets) whole.push_back(ps->size());
-  d.distribute(g, Shape::support, axis, sets, [&](std::size_t k, std::size_t p) {
-    return first_node<Shape>(g, sets[k]->x[p], sets[k]->l[p], axis);
-  });
+  // Shares (State::shares): each schedule order's place in the whole order (each rank's order
+  // after those of the ranks before it, as the pieces were written) travels with its particle.
+  std::vector<std::vector<std::int64_t>> place(sets.size());
+  if (st.shares)
+    for (std::size_t k = 0; k < sets.size(); ++k) {
+      place[k].assign(sets[k]->size(), -1);
+      const StripeSchedule& sc = *schedules[k];
+      if (!sc.built() || sc.order().size() != sets[k]->size()) continue;
+      const std::vector<long> counts = all_gather(static_cast<long>(sets[k]->size()));
+      std::int64_t first = 0;
+      for (int r = 0; r < rank(); ++r) first += counts[static_cast<std::size_t>(r)];
+      for (std::size_t j = 0; j < sc.order().size(); ++j) place[k][static_cast<std::size_t>(sc.order()[j])] = first + static_cast<std::int64_t>(j);
+    }
+  d.distribute(
+      g, Shape::support, axis, sets,
+      [&](std::size_t k, std::size_t p) { return first_node<Shape>(g, sets[k]->x[p], sets[k]->l[p], axis); },
+      st.shares ? &place : nullptr);
   for (std::size_t k = 0; k < sets.size(); ++k) {
     StripeSchedule& sc = *schedules[k];
-    if (sc.built() && sc.order().size() == whole[k]) sc.restore_order(local_order(sc.order(), sets[k]->key));
+    if (st.shares) {
+      const auto placed = [](std::int64_t q) { return q >= 0; };
+      if (any(std::any_of(place[k].begin(), place[k].end(), placed))) {
+        if (!std::all_of(place[k].begin(), place[k].end(), placed))
+          throw std::logic_error("distribute: a schedule order without some of its particles");
+        sc.restore_order(order_by(place[k]));
+      }
+    } else if (sc.built() && sc.order().size() == whole[k]) {
+      sc.restore_order(local_order(sc.order(), sets[k]->key));
+    }
     sc.set_exchange(d.exchange());
   }
+  st.shares = false;
   st.index_ids();
 }
 

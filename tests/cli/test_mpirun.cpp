@@ -679,6 +679,30 @@ TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
   EXPECT_EQ(scene::read_pvd(one + "/output/results.pvd").size(), frames.size());
 }
 
+TEST(Mpirun, ACheckpointOfThreeRanksResumesOnTwoAndOnFourBitForBit) {
+  // The pieces are read in blocks (three pieces on two ranks: one reads one, the other two; on
+  // four ranks one reads none) and every particle goes to its owner with its place in the
+  // schedule order (State::shares): no rank puts the whole run together.
+  nlohmann::json s = column_collapse(2, "bspline2");
+  s["time"]["dt"] = 2.5e-4;
+  s["output"]["checkpoint_interval"] = 0.1375;
+  const auto [dir, one, run] = restart_runs(s, "mpirun-restart-3");
+  const auto reference = last_frame(one);
+  const std::string monitors = read_text(one + "/monitors.csv");
+  const Result three = mpirun(3, "solve " + run + " -q --threads 1", dir);
+  ASSERT_EQ(three.status, 0) << three.err;
+  for (int r = 0; r < 3; ++r) EXPECT_TRUE(fs::exists(run + "/checkpoint/piece-2-" + std::to_string(r) + ".bin")) << r;
+  for (int ranks : {2, 4}) {
+    const Result r = resume(ranks, run, dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto rj = load_json(run + "/run.json");
+    EXPECT_EQ(rj["resumed_from_step"], 1100) << ranks;
+    EXPECT_EQ(rj["ranks"], ranks);
+    EXPECT_EQ(differing_values(reference, last_frame(run)), 0) << ranks;
+    EXPECT_EQ(read_text(run + "/monitors.csv"), monitors) << ranks;
+  }
+}
+
 TEST(Mpirun, SemiImplicitTerzaghiOnTwoRanksFollowsTheOneRankRun) {
   // examples/terzaghi-semi-implicit: the column along y, the cut across it, the drained top face
   // and the traction on the upper rank; the base pore pressure history (monitors.csv) and the
