@@ -513,7 +513,8 @@ const Table& output_table() {
                       "(docs/verification.md)."},
           {.name = "checkpoint_interval", .range = positive, .unit = "s",
            .meaning = "Simulated time between restart checkpoints on disk (`RUN_DIR/checkpoint.bin`, the latest "
-                      "only), from which `swmpm solve RUN_DIR --resume` continues; absent: one with every frame. "
+                      "only; under mpirun with each rank's particles in `RUN_DIR/checkpoint/piece-<n>-<rank>.bin`), "
+                      "from which `swmpm solve RUN_DIR --resume` continues; absent: one with every frame. "
                       "Not `solver.checkpoint_every`, the in-memory last-good snapshots.",
            .default_text = "with every frame"},
           {.name = "monitors", .type = Type::objects, .def = json::array(),

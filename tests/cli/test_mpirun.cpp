@@ -627,13 +627,34 @@ TEST(Mpirun, SemiImplicitSinglePointCellMomentsOnTwoRanksFollowsTheOneRankRun3D)
   expect_follows(semi_implicit_collapse(3, "bspline2"), "mpirun-sisp-3d-moments", 2, 0.04, "3D, cell moments");
 }
 
-TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
-  // A fixed dt puts the last checkpoint (t = 0.275 s, step 1100) just before a step that stores
-  // the particles in schedule order (every 10 steps): the restored schedule order is used at once.
+/// The dry column of column_collapse with a fixed dt and checkpoints at 0.1375 and 0.275 s: the
+/// last (step 1100) falls just before a step that stores the particles in schedule order (every
+/// 10 steps), so a resume uses the restored schedule order at once.
+nlohmann::json restart_column() {
   nlohmann::json s = column_collapse(2, "bspline2");
   s["time"]["dt"] = 2.5e-4;
   s["output"]["checkpoint_interval"] = 0.1375;
-  const auto [dir, one, run] = restart_runs(s, "mpirun-restart");
+  return s;
+}
+
+/// `run` resumed from step 1100 on `ranks` ranks ends on the uninterrupted one-rank run's last
+/// frame (`reference`) and monitors.csv, bit for bit.
+void expect_resumes_bitwise(const std::string& run, const fs::path& dir, int ranks, const scene::PointCloud& reference,
+                            const std::string& monitors) {
+  const Result r = resume(ranks, run, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto rj = load_json(run + "/run.json");
+  EXPECT_EQ(rj["resumed_from_step"], 1100) << ranks;
+  EXPECT_EQ(rj["ranks"], ranks);
+  if (ranks > 1) {
+    EXPECT_EQ(rj["particles_per_rank"]["each"].size(), static_cast<std::size_t>(ranks));
+  }
+  EXPECT_EQ(differing_values(reference, last_frame(run)), 0) << ranks;
+  EXPECT_EQ(read_text(run + "/monitors.csv"), monitors) << ranks;
+}
+
+TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOnThreeBitForBit) {
+  const auto [dir, one, run] = restart_runs(restart_column(), "mpirun-restart");
   const auto reference = last_frame(one);
   const std::string monitors = read_text(one + "/monitors.csv");
 
@@ -656,26 +677,13 @@ TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOneRanksOnThreeBitForBit) {
   EXPECT_NE(missing.err.find("piece-2-1.bin: missing"), std::string::npos) << missing.err;
   EXPECT_EQ(load_json(run + "/run.json")["ranks"], 2);
   fs::rename(run + "/piece.aside", run + "/checkpoint/piece-2-1.bin");
-  // 2 -> 1: the one-rank resume of the two ranks' checkpoint ends on the one-rank run's answers.
-  const Result r1 = swmpm_cmd("solve " + run + " --resume -q --threads 1", dir);
-  ASSERT_EQ(r1.status, 0) << r1.err;
-  auto rj = load_json(run + "/run.json");
-  EXPECT_EQ(rj["resumed_from_step"], 1100);
-  EXPECT_EQ(rj["ranks"], 1);
-  EXPECT_EQ(differing_values(reference, last_frame(run)), 0);
-  EXPECT_EQ(read_text(run + "/monitors.csv"), monitors);
-  // 1 -> 3: that run's last checkpoint (one rank's) resumes on three ranks, the same again.
-  const Result r3 = mpirun(3, "solve " + run + " --resume -q --threads 1", dir);
-  ASSERT_EQ(r3.status, 0) << r3.err;
-  rj = load_json(run + "/run.json");
-  EXPECT_EQ(rj["resumed_from_step"], 1100);
-  EXPECT_EQ(rj["ranks"], 3);
-  EXPECT_EQ(rj["particles_per_rank"]["each"].size(), 3u);
+  // 2 -> 1 (the one rank reads both pieces: the snapshot one rank writes), then the same
+  // checkpoint (the resumed run writes none before its end) 2 -> 3: the one-rank run's answers.
+  expect_resumes_bitwise(run, dir, 1, reference, monitors);
+  expect_resumes_bitwise(run, dir, 3, reference, monitors);
   const auto frames = scene::read_pvd(run + "/output/results.pvd");
   ASSERT_FALSE(frames.empty());
   EXPECT_EQ(frames.back().file.substr(frames.back().file.size() - 5), ".pvtu");
-  EXPECT_EQ(differing_values(reference, last_frame(run)), 0);
-  EXPECT_EQ(read_text(run + "/monitors.csv"), monitors);
   EXPECT_EQ(scene::read_pvd(one + "/output/results.pvd").size(), frames.size());
 }
 
@@ -683,24 +691,14 @@ TEST(Mpirun, ACheckpointOfThreeRanksResumesOnTwoAndOnFourBitForBit) {
   // The pieces are read in blocks (three pieces on two ranks: one reads one, the other two; on
   // four ranks one reads none) and every particle goes to its owner with its place in the
   // schedule order (State::shares): no rank puts the whole run together.
-  nlohmann::json s = column_collapse(2, "bspline2");
-  s["time"]["dt"] = 2.5e-4;
-  s["output"]["checkpoint_interval"] = 0.1375;
-  const auto [dir, one, run] = restart_runs(s, "mpirun-restart-3");
+  const auto [dir, one, run] = restart_runs(restart_column(), "mpirun-restart-3");
   const auto reference = last_frame(one);
   const std::string monitors = read_text(one + "/monitors.csv");
   const Result three = mpirun(3, "solve " + run + " -q --threads 1", dir);
   ASSERT_EQ(three.status, 0) << three.err;
   for (int r = 0; r < 3; ++r) EXPECT_TRUE(fs::exists(run + "/checkpoint/piece-2-" + std::to_string(r) + ".bin")) << r;
-  for (int ranks : {2, 4}) {
-    const Result r = resume(ranks, run, dir);
-    ASSERT_EQ(r.status, 0) << r.err;
-    const auto rj = load_json(run + "/run.json");
-    EXPECT_EQ(rj["resumed_from_step"], 1100) << ranks;
-    EXPECT_EQ(rj["ranks"], ranks);
-    EXPECT_EQ(differing_values(reference, last_frame(run)), 0) << ranks;
-    EXPECT_EQ(read_text(run + "/monitors.csv"), monitors) << ranks;
-  }
+  expect_resumes_bitwise(run, dir, 2, reference, monitors);
+  expect_resumes_bitwise(run, dir, 4, reference, monitors);
 }
 
 TEST(Mpirun, SemiImplicitTerzaghiOnTwoRanksFollowsTheOneRankRun) {
