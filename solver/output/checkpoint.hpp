@@ -52,7 +52,7 @@ class Checkpoint {
   bool has(const std::string& name) const;
   /// A particle order (indices into the particle set `set`, as a scatter schedule's): stored as
   /// put() does and marked in the header ("particle_orders"), so that a run on several ranks can
-  /// gather it with its set into the one-rank run's order (parallel::gather_order).
+  /// write it with its set in pieces and a resume put it together (assembled).
   void put_order(const std::string& name, const std::string& set, const std::vector<int>& order) {
     put(name, order);
     header["particle_orders"][name] = set;
@@ -90,7 +90,7 @@ class Checkpoint {
   /// arrays and header "pieces"; each rank's particles in its own file, named there, relative to
   /// `dir`): pieces [first, last) put together, each set's fields in key order ("pieces"/
   /// "key_field" names the key's field), each particle order as positions in that set (each
-  /// piece's entries in piece order, as parallel::gather_order gives them). All pieces: the
+  /// piece's entries in piece order). All pieces: the
   /// snapshot one rank writes (key order is the one-rank storage order); none: empty sets and
   /// orders ("pieces"/"fields" and "orders" give their layout). Throws CheckpointError
   /// when a piece is missing, damaged or of another checkpoint.

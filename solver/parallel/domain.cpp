@@ -395,26 +395,6 @@ ParticleSet<Dim> gather_set(const ParticleSet<Dim>& ps) {
   return all;
 }
 
-template <int Dim>
-std::vector<int> gather_order(const std::vector<int>& order, const ParticleSet<Dim>& ps,
-                              const std::vector<std::int64_t>& whole_keys) {
-  std::vector<char> bytes(order.size() * sizeof(std::int64_t));
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const std::int64_t key = ps.key[static_cast<std::size_t>(order[k])];
-    std::memcpy(bytes.data() + k * sizeof key, &key, sizeof key);
-  }
-  std::vector<int> whole;
-  for (const auto& part : gather_to_root(bytes))  // rank 0: every rank's keys, in rank order
-    for (std::size_t k = 0; k < part.size() / sizeof(std::int64_t); ++k) {
-      std::int64_t key;
-      std::memcpy(&key, part.data() + k * sizeof key, sizeof key);
-      const auto it = std::lower_bound(whole_keys.begin(), whole_keys.end(), key);
-      if (it == whole_keys.end() || *it != key) throw std::logic_error("gather_order: a key missing from the whole set");
-      whole.push_back(static_cast<int>(it - whole_keys.begin()));
-    }
-  return whole;
-}
-
 std::vector<std::int64_t> carry_values(const std::vector<std::int64_t>& keys, const std::vector<std::int64_t>& values,
                                        const std::vector<int>& dest, const std::vector<std::int64_t>& keys_after) {
   using Pair = std::array<std::int64_t, 2>;  // key, value
@@ -445,7 +425,5 @@ template bool move_particles<2>(ParticleSet<2>&, const std::vector<int>&, const 
 template bool move_particles<3>(ParticleSet<3>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&);
 template ParticleSet<2> gather_set<2>(const ParticleSet<2>&);
 template ParticleSet<3> gather_set<3>(const ParticleSet<3>&);
-template std::vector<int> gather_order<2>(const std::vector<int>&, const ParticleSet<2>&, const std::vector<std::int64_t>&);
-template std::vector<int> gather_order<3>(const std::vector<int>&, const ParticleSet<3>&, const std::vector<std::int64_t>&);
 
 }  // namespace swmpm::parallel

@@ -109,23 +109,15 @@ bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const Fi
 template <int Dim>
 ParticleSet<Dim> gather_set(const ParticleSet<Dim>& ps);
 
-/// A particle order of this rank's set `ps` (indices into it, as its scatter schedule's), as one
-/// order of the whole set that gather_set builds: on rank 0, each rank's entries in rank order,
-/// as positions in the whole set (`whole_keys`: its keys, increasing); empty on the other ranks.
-/// The restart file's form of a schedule order, as the one-rank run stores it. Collective.
-template <int Dim>
-std::vector<int> gather_order(const std::vector<int>& order, const ParticleSet<Dim>& ps,
-                              const std::vector<std::int64_t>& whole_keys);
-
 /// Values that travel with particles: `values[p]` of this rank's particle p (key keys[p]) goes
 /// to rank dest[p], as move_particles sends the particle; returns the values of the particles this
 /// rank holds after the move, whose keys are `keys_after` (increasing). Collective.
 std::vector<std::int64_t> carry_values(const std::vector<std::int64_t>& keys, const std::vector<std::int64_t>& values,
                                        const std::vector<int>& dest, const std::vector<std::int64_t>& keys_after);
 
-/// The inverse on a resume: an order of the whole set (positions in it) restricted to the
-/// particles this rank kept (`keys`: their positions in the whole set, increasing), as indices
-/// into the rank's set.
+/// On a resume from a whole checkpoint (one rank's): an order of the whole set (positions in it)
+/// restricted to the particles this rank kept (`keys`: their positions in the whole set,
+/// increasing), as indices into the rank's set.
 inline std::vector<int> local_order(const std::vector<int>& whole_order, const std::vector<std::int64_t>& keys) {
   std::vector<int> local;
   local.reserve(keys.size());
