@@ -100,14 +100,11 @@ class Dry final : public Formulation<Dim> {
     // Per material the largest modulus and the smallest density, over all ranks.
     const ParticleSet<Dim>& ps = st.solid;
     const std::size_t K = materials_.size();
-    std::vector<double> rho_min(K, std::numeric_limits<double>::max()), modulus(K, 0.0);
-    for (std::size_t k = 0; k < K; ++k) {
-      if (material_particles_[k].empty()) continue;
+    std::vector<double> rho_min(K, std::numeric_limits<double>::max());
+    for (std::size_t k = 0; k < K; ++k)
       for (int p : material_particles_[k]) rho_min[k] = std::min(rho_min[k], ps.m[p] / ps.V[p]);
-      modulus[k] = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
-    }
     parallel::min(std::span<double>(rho_min));
-    parallel::max(std::span<double>(modulus));
+    const std::vector<double> modulus = max_p_wave_moduli(materials_, ps, material_particles_);
     double c_max = 0.0;
     for (std::size_t k = 0; k < K; ++k)
       if (rho_min[k] < std::numeric_limits<double>::max()) c_max = std::max(c_max, std::sqrt(modulus[k] / rho_min[k]));

@@ -212,9 +212,10 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
     // Called every step with dt "auto": the per-point maxima in parallel (a max does not depend on
     // the order), of the squares, with one square root each.
     double c2_solid = 0.0;
+    const std::vector<double> moduli = max_p_wave_moduli(materials_, ps, material_particles_);
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       if (material_particles_[k].empty() || !materials_[k]) continue;
-      const double M_s = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
+      const double M_s = moduli[k];
       const auto& ids = material_particles_[k];
       const long m = static_cast<long>(ids.size());
 #pragma omp parallel for schedule(static) reduction(max : c2_solid) if (m > parallel_threshold)

@@ -179,9 +179,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     // the drag is implicit at the nodes, so it sets no limit.
     const ParticleSet<Dim>& ps = st.solid;
     double c_max = 0.0;
+    const std::vector<double> moduli = max_p_wave_moduli(materials_, ps, material_particles_);
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       if (material_particles_[k].empty() || !materials_[k]) continue;
-      const double M_s = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
+      const double M_s = moduli[k];
       for (int p : material_particles_[k]) {
         const double rho_sat = (ps.m[p] + ps.m_f[p]) / ps.V[p];
         const double M = M_s + (ps.fluid_material[p] >= 0 ? pore_[k].K_f / ps.n[p] : 0.0);

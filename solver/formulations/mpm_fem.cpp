@@ -229,9 +229,10 @@ class MpmFem final : public Formulation<Dim> {
     // and the fluid's advective CFL h / |v_f|max (the Adams–Bashforth advection velocity is explicit).
     const ParticleSet<Dim>& ps = st.solid;
     double c2 = 0.0;
+    const std::vector<double> moduli = max_p_wave_moduli(materials_, ps, material_particles_);
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       if (material_particles_[k].empty() || !materials_[k]) continue;
-      const double M = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
+      const double M = moduli[k];
       for (int p : material_particles_[k]) c2 = std::max(c2, M * ps.V[p] / ps.m[p]);
     }
     // The coupling: the soil takes the fluid's pressure of the step it moved in (the seed's

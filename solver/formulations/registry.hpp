@@ -110,6 +110,20 @@ inline void restore_order(const Checkpoint& c, const std::string& name, StripeSc
   schedule.restore_order(std::move(order));
 }
 
+/// Per material, the largest P-wave modulus K + 4G/3 of its points over all ranks (0 without
+/// points): what a time step's CFL combines with each point's own density and porosity, the same
+/// value on every rank as at one rank (a model's modulus may grow with its points' pressure, as
+/// Nor-Sand's does). Collective.
+template <int Dim, class Materials>
+std::vector<double> max_p_wave_moduli(const Materials& materials, const ParticleSet<Dim>& ps,
+                                      const std::vector<std::vector<int>>& groups) {
+  std::vector<double> modulus(materials.size(), 0.0);
+  for (std::size_t k = 0; k < materials.size(); ++k)
+    if (!groups[k].empty() && materials[k]) modulus[k] = materials[k]->max_p_wave_modulus(ps, groups[k]);
+  parallel::max(std::span<double>(modulus));
+  return modulus;
+}
+
 /// Cundall's local damping of a nodal force: f_a <- f_a - alpha |f_a| sign(v_a), per component.
 template <int Dim>
 inline Vec<Dim> local_damping(Vec<Dim> f, const Vec<Dim>& v, double alpha) {

@@ -372,9 +372,10 @@ class Core : public Formulation<Dim> {
     // carries the pore water with it (saturated density; a dry point's own, which is faster).
     const ParticleSet<Dim>& ps = st.solid;
     double c_max = 0.0;
+    const std::vector<double> moduli = max_p_wave_moduli(materials_, ps, material_particles_);
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       if (material_particles_[k].empty() || !materials_[k]) continue;
-      const double M = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
+      const double M = moduli[k];
       for (int p : material_particles_[k]) {
         const double rho = (ps.m[p] + (dry(ps, p) ? 0.0 : ps.n[p] * pore_[k].rho_w * ps.V[p])) / ps.V[p];
         c_max = std::max(c_max, std::sqrt(M / rho));
