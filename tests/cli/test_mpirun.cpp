@@ -669,16 +669,30 @@ void expect_resumes_bitwise(const std::string& run, const fs::path& dir, int ran
   EXPECT_EQ(read_text(run + "/monitors.csv"), monitors) << ranks;
 }
 
-TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOnThreeBitForBit) {
-  const auto [dir, one, run] = restart_runs(restart_column(), "mpirun-restart");
-  const auto reference = last_frame(one);
-  const std::string monitors = read_text(one + "/monitors.csv");
+/// restart_runs of restart_column, then the run solved on `ranks` ranks to its end; the one-rank
+/// run's last frame and monitors.csv, which every resume must end on.
+struct ColumnRestart {
+  RestartRuns runs;
+  scene::PointCloud reference;
+  std::string monitors;
+};
+ColumnRestart column_restart(const std::string& name, int ranks) {
+  ColumnRestart c{restart_runs(restart_column(), name), {}, {}};
+  c.reference = last_frame(c.runs.one);
+  c.monitors = read_text(c.runs.one + "/monitors.csv");
+  const Result solved = mpirun(ranks, "solve " + c.runs.run + " -q --threads 1", c.runs.dir);
+  EXPECT_EQ(solved.status, 0) << solved.err;
+  return c;
+}
 
+TEST(Mpirun, ACheckpointOfTwoRanksResumesOnOneAndOnThreeBitForBit) {
   // Two ranks to the end: the last checkpoint (t = 0.275 s) is in pieces, each rank's particles
   // in its own file (nothing gathered), checkpoint.bin the loop's state and the list; the first
   // checkpoint's pieces were removed once the second was in place.
-  const Result two = mpirun(2, "solve " + run + " -q --threads 1", dir);
-  ASSERT_EQ(two.status, 0) << two.err;
+  const ColumnRestart c = column_restart("mpirun-restart", 2);
+  const std::string &one = c.runs.one, &run = c.runs.run;
+  const fs::path& dir = c.runs.dir;
+  const auto& [reference, monitors] = std::tie(c.reference, c.monitors);
   EXPECT_EQ(load_json(run + "/run.json")["checkpoints"], 2);
   for (const char* piece : {"/checkpoint/piece-2-0.bin", "/checkpoint/piece-2-1.bin"}) {
     ASSERT_TRUE(fs::exists(run + piece)) << piece;
@@ -707,14 +721,11 @@ TEST(Mpirun, ACheckpointOfThreeRanksResumesOnTwoAndOnFourBitForBit) {
   // The pieces are read in blocks (three pieces on two ranks: one reads one, the other two; on
   // four ranks one reads none) and every particle goes to its owner with its place in the
   // schedule order (State::shares): no rank puts the whole run together.
-  const auto [dir, one, run] = restart_runs(restart_column(), "mpirun-restart-3");
-  const auto reference = last_frame(one);
-  const std::string monitors = read_text(one + "/monitors.csv");
-  const Result three = mpirun(3, "solve " + run + " -q --threads 1", dir);
-  ASSERT_EQ(three.status, 0) << three.err;
-  for (int r = 0; r < 3; ++r) EXPECT_TRUE(fs::exists(run + "/checkpoint/piece-2-" + std::to_string(r) + ".bin")) << r;
-  expect_resumes_bitwise(run, dir, 2, reference, monitors);
-  expect_resumes_bitwise(run, dir, 4, reference, monitors);
+  const ColumnRestart c = column_restart("mpirun-restart-3", 3);
+  for (int r = 0; r < 3; ++r)
+    EXPECT_TRUE(fs::exists(c.runs.run + "/checkpoint/piece-2-" + std::to_string(r) + ".bin")) << r;
+  expect_resumes_bitwise(c.runs.run, c.runs.dir, 2, c.reference, c.monitors);
+  expect_resumes_bitwise(c.runs.run, c.runs.dir, 4, c.reference, c.monitors);
 }
 
 TEST(Mpirun, SemiImplicitTerzaghiOnTwoRanksFollowsTheOneRankRun) {
