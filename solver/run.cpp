@@ -928,9 +928,7 @@ class Runner {
                             {"key_field", key_field()},
                             {"fields", {{"solid", field_bytes(state_.solid)}, {"fluid", field_bytes(state_.fluid)}}},
                             {"orders", piece.header.value("particle_orders", Json::object())},
-                            {"files", names},
-                            {"solid", parallel::all_gather(static_cast<long>(state_.solid.size()))},
-                            {"fluid", parallel::all_gather(static_cast<long>(state_.fluid.size()))}};
+                            {"files", names}};
       piece.header["generation"] = checkpoint_generation_;
       piece.header["rank"] = parallel::rank();
       piece.header["step"] = state_.step;

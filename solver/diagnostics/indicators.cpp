@@ -12,7 +12,7 @@ namespace swmpm::diagnostics {
 double typical_spacing(std::span<const double> V0, int dim) {
   if (V0.empty()) return 0.0;
   std::vector<double> s(V0.size());
-  for (std::size_t p = 0; p < V0.size(); ++p) s[p] = std::pow(std::max(V0[p], 0.0), 1.0 / dim);
+  for (std::size_t p = 0; p < V0.size(); ++p) s[p] = spacing_of(V0[p], dim);
   const auto mid = s.begin() + static_cast<std::ptrdiff_t>(s.size() / 2);
   std::nth_element(s.begin(), mid, s.end());
   return *mid;
@@ -91,6 +91,12 @@ double plane_residual(const Neighbourhood& nb, std::span<const double> value, st
 
 }  // namespace
 
+double largest_magnitude(std::span<const double> value) {
+  double largest = 0.0;
+  for (double v : value) largest = std::max(largest, std::abs(v));
+  return largest;
+}
+
 double checkerboard_scale(double min, double max, double largest, double absolute_floor) {
   return std::max({max - min, kRangeRelativeFloor * largest, absolute_floor});
 }
@@ -137,9 +143,7 @@ Checkerboard checkerboard(const Neighbourhood& nb, std::span<const double> value
   Checkerboard c;
   if (n == 0) return c;
   const Range r = range(value);
-  double largest = 0.0;
-  for (double v : value) largest = std::max(largest, std::abs(v));
-  c.scale = checkerboard_scale(r.min, r.max, largest, absolute_floor);
+  c.scale = checkerboard_scale(r.min, r.max, largest_magnitude(value), absolute_floor);
   if (!(c.scale > 0.0) || !std::isfinite(c.scale)) return c;
   return checkerboard_of(checkerboard_part(nb, value, n), c.scale);
 }
@@ -150,16 +154,20 @@ AtRest at_rest(const Neighbourhood& nb, std::span<const double> displacement, st
   const std::size_t n = nb.size();
   if (displacement.size() != n || speed.size() != n)
     throw std::invalid_argument("at_rest: one displacement and one speed per point expected");
-  for (std::size_t p = 0; p < n; ++p) {
+  largest_motion(displacement, speed, a);
+  if (!(a.displacement_max > 0.0)) return a;  // nothing has moved: no region is "at rest" relative to motion
+  at_rest_part(nb, displacement, speed, fraction * a.displacement_max, n, a);
+  return a;
+}
+
+void largest_motion(std::span<const double> displacement, std::span<const double> speed, AtRest& a) {
+  for (std::size_t p = 0; p < speed.size(); ++p) {
     a.displacement_max = std::max(a.displacement_max, displacement[p]);
     if (speed[p] > a.speed_max || a.fastest < 0) {
       a.speed_max = std::max(a.speed_max, speed[p]);
       a.fastest = static_cast<long>(p);
     }
   }
-  if (!(a.displacement_max > 0.0)) return a;  // nothing has moved: no region is "at rest" relative to motion
-  at_rest_part(nb, displacement, speed, fraction * a.displacement_max, n, a);
-  return a;
 }
 
 void at_rest_part(const Neighbourhood& nb, std::span<const double> displacement, std::span<const double> speed,

@@ -10,7 +10,9 @@
 // results do not depend on the thread count.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -47,6 +49,8 @@ inline constexpr double kCavitationBound = -1.0e5;  // Pa
 /// The typical spacing of a set's points: the median over the points of V0^(1/dim) (V0 the
 /// initial volume, m^3, or the area per metre, m^2, in 2D). 0 for an empty set.
 double typical_spacing(std::span<const double> V0, int dim);
+/// A point's spacing from its initial volume: V0^(1/dim) (0 for V0 <= 0).
+inline double spacing_of(double V0, int dim) { return std::pow(std::max(V0, 0.0), 1.0 / dim); }
 
 /// The lowest corner of the points' finite coordinates (0 on an axis where none is finite): where
 /// a Neighbourhood's bins start.
@@ -119,6 +123,8 @@ struct Checkerboard {
   double worst_residual = 0.0;
 };
 Checkerboard checkerboard(const Neighbourhood& nb, std::span<const double> value, double absolute_floor = 0.0);
+/// The largest |value| (0 for none): with the range, what the index's scale reads.
+double largest_magnitude(std::span<const double> value);
 
 /// The index in parts, for ranks that each hold a share of the points: the scale from the whole
 /// field's smallest and largest value and largest |value|; each rank's residuals of its own points
@@ -146,6 +152,9 @@ struct AtRest {
 };
 AtRest at_rest(const Neighbourhood& nb, std::span<const double> displacement, std::span<const double> speed,
                double fraction = kAtRestFraction);
+/// The set's largest displacement, its largest speed and the first point that has it (fills
+/// displacement_max, speed_max and fastest; `speed` may be shorter than `displacement`: its points).
+void largest_motion(std::span<const double> displacement, std::span<const double> speed, AtRest& a);
 /// A rank's part: its own points [0, owned) at rest, judged against `bound` (the fraction of the
 /// whole set's largest displacement, m) over all their neighbours; fills count, speed and worst.
 void at_rest_part(const Neighbourhood& nb, std::span<const double> displacement, std::span<const double> speed,

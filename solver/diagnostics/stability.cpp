@@ -79,6 +79,8 @@ struct SetView {
   std::vector<double> u;            // m, |x - x0|
   std::vector<double> mean_stress;  // Pa, effective, compression positive (with_stress)
   std::vector<double> p;            // Pa, pore or water pressure (with_pressure)
+  std::array<double, 6> box;        // m, lowest and highest finite coordinates of the own points
+  std::array<double, 6> whole_box;  // m, the same over the ranks (the whole set's)
   std::optional<Neighbourhood> nb;
 
   SetView(const ParticleSet<Dim>& set, const char* set_name, long whole_size, bool with_stress, bool with_pressure)
@@ -98,14 +100,18 @@ struct SetView {
     if (with_pressure) p.assign(ps.p.begin(), ps.p.begin() + static_cast<std::ptrdiff_t>(owned));
     const double s = typical_spacing_over_ranks(ps.V0, Dim, whole);
     const double radius = s > 0.0 ? kRadiusInSpacings * s : 1.0;
-    // The whole set's lowest corner (lowest_corner over the ranks).
-    std::array<double, 3> lo{kInf, kInf, kInf};
+    // This rank's box, and the whole set's (highest corner negated for one min over the ranks).
+    box = {kInf, kInf, kInf, -kInf, -kInf, -kInf};
     for (const auto& q : x)
       for (int a = 0; a < 3; ++a)
-        if (std::isfinite(q[a])) lo[a] = std::min(lo[a], q[a]);
-    parallel::min(std::span<double>(lo));
-    for (double& c : lo)
-      if (c == kInf) c = 0.0;
+        if (std::isfinite(q[a])) box[a] = std::min(box[a], q[a]), box[3 + a] = std::max(box[3 + a], q[a]);
+    whole_box = box;
+    for (int a = 3; a < 6; ++a) whole_box[a] = -whole_box[a];
+    parallel::min(std::span<double>(whole_box));
+    for (int a = 3; a < 6; ++a) whole_box[a] = -whole_box[a];
+    // The bins' origin: the whole set's lowest corner (lowest_corner over the ranks).
+    Point lo{0, 0, 0};
+    for (int a = 0; a < 3; ++a) lo[a] = whole_box[a] == kInf ? 0.0 : whole_box[a];
     if (parallel::distributed()) add_ghosts(radius, with_stress, with_pressure);
     nb.emplace(x, Dim, radius, lo, key);
   }
@@ -113,10 +119,6 @@ struct SetView {
   /// Every rank's bounding box of its own finite points; each rank sends those of its points within
   /// `radius` of another's box to it (one all-to-all). Collective.
   void add_ghosts(double radius, bool with_stress, bool with_pressure) {
-    std::array<double, 6> box{kInf, kInf, kInf, -kInf, -kInf, -kInf};  // lo, hi
-    for (const auto& q : x)
-      for (int a = 0; a < 3; ++a)
-        if (std::isfinite(q[a])) box[a] = std::min(box[a], q[a]), box[3 + a] = std::max(box[3 + a], q[a]);
     std::vector<char> mine(sizeof box);
     std::memcpy(mine.data(), box.data(), sizeof box);
     const auto boxes = parallel::all_gather(mine);
@@ -172,16 +174,8 @@ struct SetView {
   }
   /// The largest extent of the whole set's bounding box [m].
   double extent() const {
-    std::array<double, 3> lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};
-    for (int a = 0; a < Dim; ++a)
-      for (std::size_t q = 0; q < owned; ++q) {
-        lo[a] = q ? std::min(lo[a], x[q][a]) : x[q][a];
-        hi[a] = q ? std::max(hi[a], x[q][a]) : x[q][a];
-      }
-    parallel::min(std::span<double>(lo));
-    parallel::max(std::span<double>(hi));
     double e = 0.0;
-    for (int a = 0; a < Dim; ++a) e = std::max(e, hi[a] - lo[a]);
+    for (int a = 0; a < Dim; ++a) e = std::max(e, whole_box[3 + a] - whole_box[a]);
     return e;
   }
 };
@@ -204,13 +198,7 @@ void add_motion(const SetView<Dim>& v, double elapsed, Motion& m) {
   std::vector<double> speed(n);
   for (std::size_t p = 0; p < n; ++p) speed[p] = v.ps.v[p].norm();
   AtRest a;
-  for (std::size_t p = 0; p < n; ++p) {
-    a.displacement_max = std::max(a.displacement_max, v.u[p]);
-    if (speed[p] > a.speed_max || a.fastest < 0) {
-      a.speed_max = std::max(a.speed_max, speed[p]);
-      a.fastest = static_cast<long>(p);
-    }
-  }
+  largest_motion(v.u, speed, a);  // over this rank's points (speed has those only)
   a.displacement_max = parallel::max(a.displacement_max);
   const Candidate fastest = v.best(a.speed_max, a.fastest, true);
   // Nothing has moved: no region is "at rest" relative to motion.
@@ -236,10 +224,8 @@ template <int Dim>
 void set_checkerboard(FrameIndicators& f, Indicator k, const SetView<Dim>& v, const std::vector<double>& value) {
   const std::span<const double> own(value.data(), v.owned);
   const Range r = range(own);
-  double largest = 0.0;
-  for (double x : own) largest = std::max(largest, std::abs(x));
   const double scale = checkerboard_scale(parallel::min(v.owned ? r.min : kInf), parallel::max(v.owned ? r.max : -kInf),
-                                          parallel::max(largest), kStressFloor);
+                                          parallel::max(largest_magnitude(own)), kStressFloor);
   f.value[k] = 0.0;
   f.where[k] = {};
   if (!(scale > 0.0) || !std::isfinite(scale)) return;
@@ -279,7 +265,7 @@ double typical_spacing_over_ranks(std::span<const double> V0, int dim, long whol
   if (whole == 0) return 0.0;
   std::vector<std::uint64_t> bits(V0.size());
   for (std::size_t p = 0; p < V0.size(); ++p) {
-    const double s = std::pow(std::max(V0[p], 0.0), 1.0 / dim);
+    const double s = spacing_of(V0[p], dim);
     bits[p] = std::bit_cast<std::uint64_t>(s >= 0.0 ? s : kInf);
   }
   std::sort(bits.begin(), bits.end());

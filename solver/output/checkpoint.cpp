@@ -134,14 +134,6 @@ Checkpoint Checkpoint::assembled(const std::filesystem::path& dir, std::size_t f
   whole.header.erase("pieces");
   for (const auto& sec : sections_) whole.put_bytes(sec.name, sec.element_bytes, sec.count, data_.data() + sec.offset);
   const std::string key_field = std::to_string(pieces.at("key_field").get<int>());
-  if (parts.empty()) {  // a rank with no piece to read (more ranks than pieces): empty sets
-    for (const std::string set : {"solid", "fluid"}) {
-      const auto bytes = pieces.at("fields").at(set).get<std::vector<std::size_t>>();
-      for (std::size_t k = 0; k < bytes.size(); ++k) whole.put_bytes(set + "/" + std::to_string(k), bytes[k], 0, nullptr);
-    }
-    for (const auto& [name, set] : pieces.at("orders").items()) whole.put_order(name, set.get<std::string>(), {});
-    return whole;
-  }
   // Per set: where each part's particle i went in the whole set.
   std::map<std::string, std::vector<std::vector<int>>> position;
   for (const std::string set : {"solid", "fluid"}) {
@@ -165,24 +157,24 @@ Checkpoint Checkpoint::assembled(const std::filesystem::path& dir, std::size_t f
     where.resize(parts.size());
     for (std::size_t r = 0; r < parts.size(); ++r) where[r].assign(count[r], -1);
     for (std::size_t j = 0; j < entries.size(); ++j) where[entries[j].part][entries[j].index] = static_cast<int>(j);
-    // Each field: carried where a piece holds particles (a piece without any carries none).
-    for (int k = 0; !parts.empty() && parts[0].has(set + "/" + std::to_string(k)); ++k) {
+    // Each field (the layout checkpoint.bin lists): carried where a piece holds particles (a piece
+    // without any carries none; no piece at all: a rank with none to read gets empty sets).
+    const auto fields = pieces.at("fields").at(set).get<std::vector<std::size_t>>();
+    for (std::size_t k = 0; k < fields.size(); ++k) {
       const std::string name = set + "/" + std::to_string(k);
+      const std::size_t bytes = fields[k];
       std::vector<const Section*> sec(parts.size());
       bool active = false;
       for (std::size_t r = 0; r < parts.size(); ++r) {
-        for (const auto& s : parts[r].sections_)
-          if (s.name == name) sec[r] = &s;
-        if (!sec[r]) throw CheckpointError((dir / files[r]).string() + ": no array \"" + name + "\"");
+        sec[r] = &parts[r].find(name, bytes);  // present, of that element size
         active = active || sec[r]->count > 0;
       }
-      const std::size_t bytes = sec[0]->element_bytes;
       if (!active) {
         whole.put_bytes(name, bytes, 0, nullptr);
         continue;
       }
       for (std::size_t r = 0; r < parts.size(); ++r)
-        if (count[r] > 0 && (sec[r]->count != count[r] || sec[r]->element_bytes != bytes))
+        if (count[r] > 0 && sec[r]->count != count[r])
           throw CheckpointError((dir / files[r]).string() + ": array \"" + name + "\" holds " + std::to_string(sec[r]->count) +
                                 " values for " + std::to_string(count[r]) + " particles");
       std::vector<char> all(entries.size() * bytes);
@@ -194,9 +186,7 @@ Checkpoint Checkpoint::assembled(const std::filesystem::path& dir, std::size_t f
     }
   }
   // The particle orders: each piece's entries in piece order, as positions in the whole set.
-  const auto orders = parts.empty() ? nlohmann::ordered_json::object()
-                                    : parts[0].header.value("particle_orders", nlohmann::ordered_json::object());
-  for (const auto& [name, set_json] : orders.items()) {
+  for (const auto& [name, set_json] : pieces.at("orders").items()) {
     const std::string set = set_json.get<std::string>();
     std::vector<int> order;
     for (std::size_t r = 0; r < parts.size(); ++r) {

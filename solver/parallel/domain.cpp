@@ -380,16 +380,8 @@ template <int Dim>
 ParticleSet<Dim> gather_set(const ParticleSet<Dim>& ps) {
   ParticleSet<Dim> all = ps;
   if (ranks() == 1) return all;
-  // The fields the set carries on any rank that holds particles.
-  FieldBytes layout;
-  std::vector<long> active;
+  const FieldBytes layout = layout_over_ranks(all);
   const std::size_t n = all.size();
-  all.for_each_field([&](auto& f) { active.push_back(n > 0 && f.size() == n); });
-  max(std::span<long>(active));
-  for (long a : active) layout.active.push_back(static_cast<char>(a));
-  all.for_each_field([&, k = std::size_t{0}](auto& f) mutable {
-    if (layout.active[k++] && f.size() != n) f.resize(n);
-  });
   std::vector<std::max_align_t> scratch;
   move_particles(all, std::vector<int>(n, 0), layout, scratch);
   return all;

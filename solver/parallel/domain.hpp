@@ -95,6 +95,23 @@ void compact(ParticleSet<Dim>& ps, const std::vector<int>& keep, const FieldByte
   });
 }
 
+/// The fields a set carries over the ranks' shares: those any rank's particles carry (a rank
+/// without particles gets them sized to none), and always the key. Collective.
+template <int Dim>
+FieldBytes layout_over_ranks(ParticleSet<Dim>& ps) {
+  std::vector<long> active;
+  const std::size_t n = ps.size();
+  ps.for_each_field([&](auto& f) { active.push_back(n > 0 && f.size() == n); });
+  max(std::span<long>(active));
+  FieldBytes l;
+  for (long a : active) l.active.push_back(static_cast<char>(a));
+  l.active.back() = 1;  // the key (the last field)
+  ps.for_each_field([&, k = std::size_t{0}](auto& f) mutable {
+    if (l.active[k++] && f.size() != n) f.resize(n);
+  });
+  return l;
+}
+
 /// Moves particle p of `ps` to rank dest[p] (the fields `layout` marks), in one all-to-all;
 /// the set is then in key order (the kept particles and each rank's arrivals are; their keys are
 /// merged, and each field is rebuilt in one pass through `scratch`, kept by the caller). Collective.
@@ -173,7 +190,7 @@ class Domain {
     std::vector<std::vector<int>> stripe_of(sets.size());
     for (std::size_t k = 0; k < sets.size(); ++k) {
       ParticleSet<Dim>& ps = *sets[k];
-      layouts_.push_back(carried ? layout_over_ranks(ps) : layout_of(ps));
+      layouts_.push_back(carried ? parallel::layout_over_ranks(ps) : layout_of(ps));
       stripe_of[k].resize(ps.size());
       for (std::size_t p = 0; p < ps.size(); ++p) {
         const int s = std::clamp(first_node(k, p) / width_, 0, stripes_ - 1);
@@ -348,22 +365,6 @@ class Domain {
     for (int r = 0; r < ranks(); ++r)
       for (int s = cuts_[static_cast<std::size_t>(r)]; s < cuts_[static_cast<std::size_t>(r) + 1]; ++s) owner_[static_cast<std::size_t>(s)] = r;
     exchange_ = std::make_unique<StripeExchange>(nodes_, axis_, width_, support_, cuts_);
-  }
-
-  /// layout_of over the ranks' shares: a field is carried if any rank's particles carry it (a
-  /// rank without particles has it sized to none). Collective.
-  static FieldBytes layout_over_ranks(ParticleSet<Dim>& ps) {
-    std::vector<long> active;
-    const std::size_t n = ps.size();
-    ps.for_each_field([&](auto& f) { active.push_back(n > 0 && f.size() == n); });
-    max(std::span<long>(active));
-    FieldBytes l;
-    for (long a : active) l.active.push_back(static_cast<char>(a));
-    l.active.back() = 1;  // the key
-    ps.for_each_field([&, k = std::size_t{0}](auto& f) mutable {
-      if (l.active[k++] && f.size() != n) f.resize(n);
-    });
-    return l;
   }
 
   static FieldBytes layout_of(ParticleSet<Dim>& ps) {

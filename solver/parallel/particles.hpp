@@ -62,9 +62,9 @@ void distribute(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedu
   if (st.shares)
     for (std::size_t k = 0; k < sets.size(); ++k) {
       place[k].assign(sets[k]->size(), -1);
+      const std::vector<long> counts = all_gather(static_cast<long>(sets[k]->size()));  // every rank calls it
       const StripeSchedule& sc = *schedules[k];
       if (!sc.built() || sc.order().size() != sets[k]->size()) continue;
-      const std::vector<long> counts = all_gather(static_cast<long>(sets[k]->size()));
       std::int64_t first = 0;
       for (int r = 0; r < rank(); ++r) first += counts[static_cast<std::size_t>(r)];
       for (std::size_t j = 0; j < sc.order().size(); ++j) place[k][static_cast<std::size_t>(sc.order()[j])] = first + static_cast<std::int64_t>(j);

@@ -13,11 +13,13 @@
 
 #include <cmath>
 #include <cstdint>
+#include <numeric>
 #include <random>
 
 #include "solver/diagnostics/indicators.hpp"
 #include "solver/diagnostics/stability.hpp"
 #include "solver/parallel/comm.hpp"
+#include "solver/parallel/domain.hpp"
 
 namespace swmpm::diagnostics {
 namespace {
@@ -90,23 +92,18 @@ State<Dim> frame(bool water_points) {
 template <int Dim>
 ParticleSet<Dim> share(const ParticleSet<Dim>& whole, bool interleaved) {
   ParticleSet<Dim> mine = whole;
-  mine.key.resize(whole.size());
-  std::vector<std::size_t> keep;
-  for (std::size_t p = 0; p < whole.size(); ++p) {
+  const std::size_t n = whole.size();
+  mine.key.resize(n);
+  std::iota(mine.key.begin(), mine.key.end(), std::int64_t{0});
+  std::vector<int> keep;
+  for (std::size_t p = 0; p < n; ++p) {
     const int strip = static_cast<int>(std::floor(whole.x0[p][0] / 0.03));
     const int owner = interleaved ? strip % parallel::ranks() : 0;
-    if (owner == parallel::rank()) keep.push_back(p);
+    if (owner == parallel::rank()) keep.push_back(static_cast<int>(p));
   }
-  mine.resize(keep.size());
-  for (std::size_t k = 0; k < keep.size(); ++k) {
-    const std::size_t p = keep[k];
-    mine.id[k] = whole.id[p], mine.x[k] = whole.x[p], mine.x0[k] = whole.x0[p], mine.v[k] = whole.v[p];
-    mine.V[k] = whole.V[p], mine.V0[k] = whole.V0[p];
-    if (!whole.sigma.empty()) mine.sigma[k] = whole.sigma[p];
-    if (whole.two_phase()) mine.n[k] = whole.n[p], mine.p[k] = whole.p[p];
-    if (!whole.m_f.empty()) mine.m_f[k] = whole.m_f[p];
-    mine.key[k] = static_cast<std::int64_t>(p);
-  }
+  parallel::FieldBytes layout;  // every field the set carries
+  mine.for_each_field([&](auto& f) { layout.active.push_back(n > 0 && f.size() == n); });
+  parallel::compact(mine, keep, layout);
   return mine;
 }
 
