@@ -97,7 +97,7 @@ struct State {
     std::int64_t max_id = -1;
     for (auto i : solid.id) max_id = std::max(max_id, i);
     // Under mpirun a rank holds some particles only: the table keeps the size of the whole set
-    // (every rank starts with all of them), and ids held elsewhere read -1.
+    // (sized for every rank's ids at the start), and ids held elsewhere read -1.
     index_of_id.assign(std::max(index_of_id.size(), static_cast<std::size_t>(max_id + 1)), -1);
     for (std::size_t p = 0; p < solid.size(); ++p) index_of_id[solid.id[p]] = static_cast<int>(p);
   }
@@ -155,7 +155,8 @@ class Formulation {
   virtual std::string on_several_ranks(const scene::Scene& /*s*/) const {
     return "formulation " + name() + " does not run on several ranks yet";
   }
-  /// Under mpirun: every rank read all the particles; each keeps its share (parallel::Domain).
+  /// Under mpirun: the particles each rank read (a slice, State::shares, or a whole one-rank
+  /// checkpoint) go to their owners (parallel::distribute).
   /// Called once by the time loop, before frame 0 of a fresh run.
   virtual void distribute(State<Dim>& /*s*/) {}
   /// Cells holding at least one particle, at the last step.

@@ -12,6 +12,7 @@
 
 #include "scene/expression.hpp"
 #include "scene/input.hpp"
+#include "solver/parallel/domain.hpp"
 
 namespace swmpm {
 
@@ -259,9 +260,42 @@ void share_samples(const ParticleSet<Dim>& ps, const std::vector<int>& cand, con
 
 }  // namespace
 
+/// The face bits (ParticleSet::faces) of the faces and named surfaces the scene loads: the
+/// particles the loads are built from carry one of them.
+std::uint32_t loaded_faces(const scene::Scene& s, bool pore_pressure_forces) {
+  std::uint32_t mask = 0;
+  auto add = [&](const std::string& face, const std::string& where) {
+    mask |= 1u << (is_axis_face(face) ? face_index(face) : scene::kFirstSurfaceBit + surface_index(s, face, where));
+  };
+  for (std::size_t i = 0; i < s.loads.size(); ++i) add(s.loads[i].face, "loads/" + std::to_string(i) + "/face");
+  for (std::size_t i = 0; pore_pressure_forces && i < s.boundaries.size(); ++i) {
+    const auto& b = s.boundaries[i];
+    if (b.fluid && *b.fluid == scene::FluidBc::pressure) add(b.on, "boundaries/" + std::to_string(i) + "/on");
+  }
+  return mask;
+}
+
+/// Under mpirun the loads are built while each rank holds a slice of the particles (a fresh
+/// start, State::shares): every rank's particles on a loaded face, gathered on every rank in the
+/// one-rank order (keys), so that every rank builds the one-rank lists. Collective.
 template <int Dim>
-ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, const ParticleSet<Dim>& ps,
+ParticleSet<Dim> loaded_particles_over_ranks(const ParticleSet<Dim>& ps, std::uint32_t mask) {
+  ParticleSet<Dim> mine = ps.empty_like();
+  mine.for_each_field_with(ps, [&](auto& to, const auto& from) {
+    if (from.size() != ps.size()) return;  // a field the set does not carry
+    for (std::size_t p = 0; p < ps.size(); ++p)
+      if (ps.faces[p] & mask) to.push_back(from[p]);
+  });
+  return parallel::all_gather_set(mine);
+}
+
+template <int Dim>
+ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, const ParticleSet<Dim>& local,
                                   const SurfaceSamples<Dim>& samples, bool pore_pressure_forces) {
+  const std::uint32_t mask = loaded_faces(s, pore_pressure_forces);
+  ParticleSet<Dim> gathered;
+  if (parallel::distributed() && mask) gathered = loaded_particles_over_ranks(local, mask);
+  const ParticleSet<Dim>& ps = parallel::distributed() ? gathered : local;
   auto body_index = [&](const std::string& name) {
     for (std::size_t b = 0; b < s.bodies.size(); ++b)
       if (s.bodies[b].name == name) return static_cast<int>(b);

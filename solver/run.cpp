@@ -278,7 +278,8 @@ class Runner {
 
   int run() {
     const auto wall_start = std::chrono::steady_clock::now();
-    // Under mpirun every rank reads the scene and the particles; rank 0 alone writes the run
+    // Under mpirun every rank reads the scene and rank 0 the particles, which it deals out in
+    // slices (read_particles); rank 0 alone writes the run
     // directory's files (but for each rank's piece of a frame). A bad input stops every rank
     // with one message and nothing written (parallel::together).
     parallel::together([&] { load_state(); });
@@ -371,15 +372,15 @@ class Runner {
     if (!fs::exists(particles) && ((water_points && fs::exists(dir_ / "particles" / "fluid.vtu")) ||
                                    (grid_water && fs::exists(phase_field))))
       state_.solid.add_fluid();
-    else state_.solid = particles_from_cloud<Dim>(scene::read_vtu(particles.string()), particles.string());
+    else state_.solid = read_particles(particles);
     if (needs_material_state(scene_)) state_.solid.add_material_state();
-    state_.index_ids();
+    index_whole_ids();
     const fs::path water = dir_ / "particles" / "fluid.vtu";
     if (scene::row_of(scene_.formulation).water.fluid_particles) {
       if (!fs::exists(water))
         throw std::runtime_error(water.string() + " is missing: a double-point formulation needs water points; "
                                  "run swmpm preprocess again");
-      state_.fluid = particles_from_cloud<Dim>(scene::read_vtu(water.string()), water.string());
+      state_.fluid = read_particles(water);
       // Semi-implicit water points use neither skeleton nor single-point pore-fluid fields: freed,
       // so reordering and snapshots do not carry them.
       // explicit-double-point keeps `sigma` on them: the liquid's viscous deviatoric stress.
@@ -393,9 +394,15 @@ class Runner {
                                  "run swmpm preprocess again");
       state_.surfaces = surface_samples_from_cloud<Dim>(scene::read_vtu(surfaces.string()), surfaces.string());
     }
-    // The grid's and the points' memory before the formulation allocates its grid.
+    // mpirun: each rank holds a slice (State::shares); the formulation's distribute sends the
+    // particles to their owners.
+    state_.shares = parallel::distributed();
+    solid_total_ = parallel::sum(static_cast<long>(state_.solid.size()));
+    fluid_total_ = parallel::sum(static_cast<long>(state_.fluid.size()));
+    // The grid's and the points' memory before the formulation allocates its grid (a rank's: the
+    // whole grid and its share of the points, the largest slice).
     scene::check_run_memory(scene_, (dir_ / "scene.json").string(),
-                            static_cast<double>(state_.solid.size() + state_.fluid.size()),
+                            static_cast<double>(parallel::max(static_cast<long>(state_.solid.size() + state_.fluid.size()))),
                             scene::memory_limit(opt_.max_memory));
     f_ = factory_ ? factory_(scene_, state_) : make_formulation<Dim>(scene_, state_);
     if (parallel::distributed()) refuse_what_cannot_run_on_several_ranks();
@@ -409,6 +416,26 @@ class Runner {
     threads_ = threads_now_ = threads_fewest_ = omp_get_max_threads();
     // --resume: the checkpoint must be this scene's and this version's.
     if (opt_.resume) resume_ = read_checkpoint(f_->name());
+  }
+
+  /// The particles of `file` (particles/solid.vtu or fluid.vtu). Under mpirun rank 0 reads them
+  /// and deals them out in slices of the file's order (parallel::scatter_slices): no other rank
+  /// ever holds the whole set, and rank 0 only until its slice is cut.
+  ParticleSet<Dim> read_particles(const fs::path& file) const {
+    ParticleSet<Dim> ps;
+    parallel::together([&] {
+      if (root()) ps = particles_from_cloud<Dim>(scene::read_vtu(file.string()), file.string());
+    });
+    parallel::scatter_slices(ps, parallel::start_slices(parallel::max(static_cast<long>(ps.size()))));
+    return ps;
+  }
+
+  /// The id table (State::index_of_id) sized for the whole set's ids, whichever rank holds them.
+  void index_whole_ids() {
+    std::int64_t max_id = -1;
+    for (const auto i : state_.solid.id) max_id = std::max(max_id, i);
+    state_.index_of_id.assign(static_cast<std::size_t>(parallel::max(static_cast<long>(max_id)) + 1), -1);
+    state_.index_ids();
   }
 
   /// mpm-fem: the initial phase field preprocess wrote on the grid's nodes (State::phase_field),
@@ -451,7 +478,7 @@ class Runner {
   /// year of wall time, more output than the disk's free space) refused before anything is written
   /// (exit 2); past a soft one a warning in the log (scene/budget.hpp).
   void estimate_cost() {
-    estimate_ = scene::estimate_run(scene_, static_cast<double>(state_.solid.size() + state_.fluid.size()), dt0_,
+    estimate_ = scene::estimate_run(scene_, static_cast<double>(solid_total_ + fluid_total_), dt0_,
                                     clock_.t_start);
     std::error_code ec;
     const auto space = fs::space(dir_, ec);
@@ -524,11 +551,11 @@ class Runner {
   void log_header() {
     log_.line("swmpm " + std::string(version) + " (" + git_hash + ") solving " + scene_.name + ": " + f_->name() +
               ", " + std::to_string(Dim) + "D, " + scene::to_string(scene_.grid.shape_function) + ", " +
-              std::to_string(state_.solid.size()) + " solid particles" +
-              (state_.fluid.size() ? ", " + std::to_string(state_.fluid.size()) + " water points" : std::string()) +
+              std::to_string(solid_total_) + " solid particles" +
+              (fluid_total_ ? ", " + std::to_string(fluid_total_) + " water points" : std::string()) +
               ", " + std::to_string(threads_) + " threads");
     for (const auto& l : scene::explain_lines(scene::choice_of(scene_))) log_.line(l);
-    for (const auto& l : monitors_->describe(state_)) log_.line(l);
+    for (const auto& l : monitors_->describe()) log_.line(l);
     const double dt_crit = dt_crit0_;
     if (clock_.auto_dt) {
       log_.line("dt auto: " + fmt(scene_.time.cfl * dt_crit) + " s = cfl " + fmt(scene_.time.cfl) + " x " +
@@ -582,7 +609,7 @@ class Runner {
         sep = "; ";
       }
     }
-    if (state_.fluid.size() && init.tie_water) os << ", water points tied to their soil points";
+    if (fluid_total_ && init.tie_water) os << ", water points tied to their soil points";
     log_.line(os.str());
   }
 
@@ -1009,6 +1036,9 @@ class Runner {
     begin_initialisation();
     clock_.restore(l);
     if (!clock_.initialising && scene_.initialisation.enabled()) f_->set_initialisation(state_, nullptr);
+    // The replay acts on the initial particles, which the checkpoint's replace: what it found
+    // there (under mpirun a tied pair split between two ranks' slices) does not count.
+    state_.health = Health{};
     state_.step = c.header.at("step");
     state_.time = c.header.at("time");
     restore_snapshot(c);
@@ -1335,6 +1365,7 @@ class Runner {
   int checkpoints_ = 0;
   long checkpoint_generation_ = 0;          // checkpoints written by the run, resumes included
   std::vector<std::string> pieces_before_;  // the pieces of the last checkpoint (mpirun), relative
+  long solid_total_ = 0, fluid_total_ = 0;  // the run's particles (over the ranks), as read
   bool resume_shares_ = false;              // the checkpoint read is this rank's pieces, not the whole
   bool all_ranks_failed_ = false;  // mpirun: a write error every rank knows of (write_frame)
   double last_good_frame_time_ = 0.0;

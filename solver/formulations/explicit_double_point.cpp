@@ -100,7 +100,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
         phase_materials_(s),
         material_particles_(group_by_material(state.solid, s.materials.size())),
         fbar_(s, grid_) {
-    if (state.fluid.size() == 0)
+    if (parallel::sum(static_cast<long>(state.fluid.size())) == 0)  // over every rank's points
       throw std::runtime_error("explicit-double-point needs liquid points (particles/fluid.vtu): give a body a "
                                "\"fluid\", then run swmpm preprocess again");
     drag_.kind = s.solver.drag == "darcy" ? porous::DragLaw::Kind::darcy : porous::DragLaw::Kind::ergun;
@@ -118,6 +118,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
     // The pore liquid of each solid material: its bodies' fluid, else the scene's first fluid (dry
     // soil that liquid reaches).
     skeleton_.resize(s.materials.size());
+    const std::vector<char> present = materials_present(material_particles_);  // over every rank's points
     for (std::size_t k = 0; k < s.materials.size(); ++k) {
       const auto& m = s.materials[k];
       if (m.model == scene::MaterialModel::fluid) continue;
@@ -134,7 +135,7 @@ class ExplicitDoublePoint final : public Formulation<Dim> {
       sk.mu = liquid_[fm].mu;
       if (m.has("hydraulic_conductivity") || m.has("intrinsic_permeability") || m.has("grain_diameter"))
         sk.perm = sk.scene_perm = porous::permeability_of(m, s.materials[fm]);
-      else if (!material_particles_[k].empty())
+      else if (present[k])
         throw std::runtime_error("material \"" + m.name + "\": explicit-double-point needs the permeability of every "
                                  "skeleton (hydraulic_conductivity, intrinsic_permeability or grain_diameter): liquid "
                                  "may reach dry soil");

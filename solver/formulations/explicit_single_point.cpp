@@ -82,11 +82,13 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
       throw std::runtime_error("explicit-single-point needs saturated particles (pore_pressure, porosity, fluid_mass "
                                "in particles/solid.vtu): run swmpm preprocess with a body that has a solid and a fluid");
     pore_.resize(s.materials.size());
-    std::vector<char> seen(s.materials.size(), 0);
-    for (std::size_t p = 0; p < state.solid.size(); ++p) {  // fluid of each solid material (first seen)
-      const int k = state.solid.material[p], fm = state.solid.fluid_material[p];
-      if (fm < 0 || seen[k]) continue;  // a dry body in a saturated scene, or known
-      seen[k] = 1;
+    // The fluid of each solid material: its first point's that has one (none: a dry body in a
+    // saturated scene), over every rank's points.
+    const std::vector<int> fluid_of = material_value_over_ranks(
+        state.solid, s.materials.size(), /*last=*/false, [&](int p) { return state.solid.fluid_material[p]; });
+    for (std::size_t k = 0; k < s.materials.size(); ++k) {
+      const int fm = fluid_of[k];
+      if (fm < 0) continue;
       const auto& f = s.materials[fm];
       auto& pf = pore_[k];
       pf.rho_f = f.at("density");
@@ -483,9 +485,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
   double initial_stress_scale(const scene::Scene& s, const ParticleSet<Dim>& ps) const {
     double scale = 0.0, rho_max = 0.0, rho_c = 0.0, v_max = 0.0;
     double y_lo = std::numeric_limits<double>::infinity(), y_hi = -y_lo;
+    const std::vector<double> moduli = max_p_wave_moduli(materials_, ps, material_particles_);  // over the ranks
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       if (material_particles_[k].empty() || !materials_[k]) continue;
-      const double M_s = materials_[k]->max_p_wave_modulus(ps, material_particles_[k]);
+      const double M_s = moduli[k];
       for (int p : material_particles_[k]) {
         const bool wet = ps.fluid_material[p] >= 0;
         if (wet) scale = std::max(scale, std::abs(ps.p[p]));
@@ -498,6 +501,10 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
         y_hi = std::max(y_hi, ps.x[p][1] + ps.l[p][1]);
       }
     }
+    std::array<double, 6> most{scale, rho_max, rho_c, v_max, -y_lo, y_hi};  // over every rank's points
+    parallel::max(std::span<double>(most));
+    std::tie(scale, rho_max, rho_c, v_max) = std::tuple(most[0], most[1], most[2], most[3]);
+    y_lo = -most[4], y_hi = most[5];
     const double g = std::sqrt(s.gravity[0] * s.gravity[0] + s.gravity[1] * s.gravity[1] + s.gravity[2] * s.gravity[2]);
     if (y_hi > y_lo) scale = std::max(scale, rho_max * g * (y_hi - y_lo));
     return std::max(scale, rho_c * v_max);

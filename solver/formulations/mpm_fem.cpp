@@ -98,10 +98,11 @@ class MpmFem final : public Formulation<Dim> {
     props.mu_a = s.solver.air.dynamic_viscosity;
     // The skeletons' permeability (hydraulic conductivity k_h [m/s]; intrinsic k = k_h mu / (rho g)).
     perm_.resize(s.materials.size());
+    const std::vector<char> present = materials_present(material_particles_);  // over every rank's points
     to_intrinsic_ = props.mu_w / (props.rho_w * porous::g_earth);
     for (std::size_t k = 0; k < s.materials.size(); ++k) {
       const auto& m = s.materials[k];
-      if (m.model == scene::MaterialModel::fluid || material_particles_[k].empty()) continue;
+      if (m.model == scene::MaterialModel::fluid || !present[k]) continue;
       if (m.has("hydraulic_conductivity") || m.has("intrinsic_permeability") || m.has("grain_diameter"))
         perm_[k] = porous::permeability_of(m, wm);
       else
@@ -155,9 +156,9 @@ class MpmFem final : public Formulation<Dim> {
     for (std::size_t i = 0; i < nodes; ++i) support_[i] = porous::basis_integral<Shape>(grid_, i);
     basis_.build(grid_);
     soil_box_ = empty_box();
-    has_soil_ = state.solid.size() > 0;  // every rank reads the whole set here (mpirun)
+    has_soil_ = parallel::sum(static_cast<long>(state.solid.size())) > 0;  // over every rank's points
     whole_grid_ = s.solver.air.whole_grid;
-    set_region(whole_grid_ ? all_cells() : wanted_region(points_node_box(state.solid), empty_box(), 1));
+    set_region(whole_grid_ ? all_cells() : wanted_region(points_node_box_over_ranks(state.solid), empty_box(), 1));
     if (initial_hydrostatic_pressure(s)) set_region(region_, /*count=*/false);  // p copied onto the region
   }
 
@@ -569,6 +570,16 @@ class MpmFem final : public Formulation<Dim> {
         b.hi[a] = std::max(b.hi[a], c + Shape::degree);  // a point in cell c reaches nodes c ... c + p
       }
     return b;
+  }
+
+  /// points_node_box of every rank's points (under mpirun each rank holds a slice of them). Collective.
+  NodeBox<Dim> points_node_box_over_ranks(const ParticleSet<Dim>& ps) const {
+    if (!parallel::distributed()) return points_node_box(ps);
+    NodeBox<Dim> b = points_node_box(ps);
+    if (ps.size() == 0)
+      for (int a = 0; a < Dim; ++a) b.lo[a] = std::numeric_limits<int>::max();  // nothing to the union
+    b = domain_.union_box(b);
+    return has_soil_ ? b : empty_box();
   }
 
   /// The cells of the water and the soil: those in the support of a node with phi > kWetPhase

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <vector>
 
@@ -122,6 +124,46 @@ std::vector<double> max_p_wave_moduli(const Materials& materials, const Particle
     if (!groups[k].empty() && materials[k]) modulus[k] = materials[k]->max_p_wave_modulus(ps, groups[k]);
   parallel::max(std::span<double>(modulus));
   return modulus;
+}
+
+/// Per material, whether any rank holds points of it (groups: the rank's points per material).
+/// What a setup step asks of the whole run, whichever slice of it the rank holds (a fresh start
+/// under mpirun builds the formulation from each rank's slice, State::shares). Collective.
+inline std::vector<char> materials_present(const std::vector<std::vector<int>>& groups) {
+  std::vector<long> any(groups.size(), 0);
+  for (std::size_t k = 0; k < groups.size(); ++k) any[k] = !groups[k].empty();
+  parallel::max(std::span<long>(any));
+  std::vector<char> present(groups.size());
+  for (std::size_t k = 0; k < groups.size(); ++k) present[k] = any[k] != 0;
+  return present;
+}
+
+/// Per material k (of `materials`), of(p) at the first point p of material k (`last`: the last
+/// one) in the one-rank storage order for which of(p) >= 0, over every rank's points; -1 where
+/// no point has one. The one-rank order is the keys' under mpirun (ParticleSet::key), the
+/// storage order at one rank. Collective.
+template <int Dim, class Of>
+std::vector<int> material_value_over_ranks(const ParticleSet<Dim>& ps, std::size_t materials, bool last, Of&& of) {
+  constexpr long none_first = std::numeric_limits<long>::max(), none_last = -1;
+  const long none = last ? none_last : none_first;
+  std::vector<long> at(materials, none), value(materials, -1);
+  const bool keyed = ps.key.size() == ps.size();
+  for (std::size_t p = 0; p < ps.size(); ++p) {
+    const int v = of(static_cast<int>(p));
+    if (v < 0) continue;
+    const std::size_t k = static_cast<std::size_t>(ps.material[p]);
+    const long place = keyed ? static_cast<long>(ps.key[p]) : static_cast<long>(p);
+    if (last ? place > at[k] : place < at[k]) at[k] = place, value[k] = v;
+  }
+  std::vector<long> chosen = at;
+  if (last) parallel::max(std::span<long>(chosen));
+  else parallel::min(std::span<long>(chosen));
+  for (std::size_t k = 0; k < materials; ++k)
+    if (at[k] != chosen[k]) value[k] = -1;  // another rank holds the chosen point
+  parallel::max(std::span<long>(value));
+  std::vector<int> out(materials);
+  for (std::size_t k = 0; k < materials; ++k) out[k] = static_cast<int>(value[k]);
+  return out;
 }
 
 /// Cundall's local damping of a nodal force: f_a <- f_a - alpha |f_a| sign(v_a), per component.

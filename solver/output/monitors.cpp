@@ -6,12 +6,31 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 
 #include "scene/formulations.hpp"
 
 namespace swmpm {
+namespace {
+
+/// The id of the point nearest a monitor's place over every rank's points (-1: no point): this
+/// rank's nearest is `particle` at squared distance d2; ties go to the first in the one-rank order
+/// (the lower key), as one rank's search keeps its first. Collective.
+template <int Dim>
+std::int64_t nearest_over_ranks(const ParticleSet<Dim>& ps, int particle, double d2) {
+  if (!parallel::distributed()) return particle < 0 ? -1 : ps.id[static_cast<std::size_t>(particle)];
+  const double best = parallel::min(particle < 0 ? std::numeric_limits<double>::max() : d2);
+  const bool candidate = particle >= 0 && d2 == best;
+  const std::size_t p = static_cast<std::size_t>(std::max(particle, 0));
+  const long key = !candidate ? std::numeric_limits<long>::max()
+                   : ps.key.size() == ps.size() ? static_cast<long>(ps.key[p]) : static_cast<long>(p);
+  const long first = parallel::min(key);
+  return parallel::max(candidate && key == first ? static_cast<long>(ps.id[p]) : -1L);
+}
+
+}  // namespace
 
 template <int Dim>
 Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const Formulation<Dim>& f,
@@ -30,6 +49,7 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const Formu
         throw std::runtime_error(where + "/quantities: \"water_level\" needs liquid points (a double-point "
                                  "formulation) or a fluid on the grid (mpm-fem)");
       monitor_particle_.push_back(-1);
+      monitor_x0_.push_back({0.0, 0.0, 0.0});
       monitor_water_.push_back(0);
       monitor_gauge_.push_back(static_cast<int>(gauges_.size()));
       monitor_probe_.push_back(-1);
@@ -46,6 +66,7 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const Formu
     if (mon.at && mon.phase == "fluid" && f.fluid_on_grid()) {  // an Eulerian probe of the grid's fluid
       const int k_probe = static_cast<int>(probes_.size());
       monitor_particle_.push_back(-1);
+      monitor_x0_.push_back({0.0, 0.0, 0.0});
       monitor_water_.push_back(0);
       monitor_gauge_.push_back(-1);
       monitor_probe_.push_back(k_probe);
@@ -71,13 +92,14 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const Formu
     // A water point of the double-point set, or a soil point. Single-point two-phase sets carry
     // both phases on one point: phase "fluid" reads its fluid fields (velocity, pore pressure).
     const bool water = mon.points == "water";
-    if (water && st.fluid.size() == 0)
+    if (water && parallel::sum(static_cast<long>(st.fluid.size())) == 0)  // over every rank's points
       throw std::runtime_error(where + "/points: \"water\" needs water points (a double-point formulation)");
     const auto& ps = water ? st.fluid : st.solid;
     int particle = -1;
     const bool fluid_phase = mon.phase == "fluid";
     if (fluid_phase && !water && !ps.two_phase())
       throw std::runtime_error(where + "/phase: \"fluid\" is not available in this formulation");
+    std::int64_t pid = -1;
     if (mon.at) {
       double best = std::numeric_limits<double>::max();
       for (std::size_t p = 0; p < ps.size(); ++p) {
@@ -88,17 +110,24 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const Formu
           particle = static_cast<int>(p);
         }
       }
+      pid = nearest_over_ranks(ps, particle, best);
     } else if (mon.particle) {
       for (std::size_t p = 0; p < ps.size(); ++p)
         if (ps.id[p] == *mon.particle) particle = static_cast<int>(p);
-      if (particle < 0)
+      if (!parallel::any(particle >= 0))  // over every rank's points
         throw std::runtime_error(where + "/particle: no " + (water ? "water point" : "solid particle") + " has id " +
                                  std::to_string(*mon.particle));
+      pid = *mon.particle;
     }
     // Columns refer to the particle by id: formulations may reorder particles (State::index_of_id).
-    const std::int64_t pid = particle < 0 ? -1 : ps.id[particle];
     monitor_particle_.push_back(pid);
     monitor_water_.push_back(water && pid >= 0);
+    std::array<double, 3> x0{0.0, 0.0, 0.0};  // the followed point's start, from the rank that holds it
+    for (std::size_t p = 0; pid >= 0 && p < ps.size(); ++p)
+      if (ps.id[p] == pid)
+        for (int a = 0; a < Dim; ++a) x0[static_cast<std::size_t>(a)] = ps.x0[p][a];
+    if (parallel::distributed()) parallel::sum(std::span<double>(x0));
+    monitor_x0_.push_back(x0);
     monitor_gauge_.push_back(-1);
     monitor_probe_.push_back(-1);
     names_.push_back(mon.name);
@@ -251,16 +280,10 @@ int Monitors<Dim>::water_index(const ParticleSet<Dim>& ws, std::int64_t id) {
 }
 
 template <int Dim>
-std::vector<std::string> Monitors<Dim>::describe(const State<Dim>& st) const {
+std::vector<std::string> Monitors<Dim>::describe() const {
   std::vector<std::string> lines;
   for (std::size_t k = 0; k < names_.size(); ++k) {
     const bool water = monitor_water_[k];
-    const auto& ps = water ? st.fluid : st.solid;
-    int p = -1;
-    if (water)
-      for (std::size_t q = 0; q < ps.size(); ++q) p = ps.id[q] == monitor_particle_[k] ? static_cast<int>(q) : p;
-    else if (monitor_particle_[k] >= 0)
-      p = st.index_of_id[monitor_particle_[k]];
     std::ostringstream os;
     os << "monitor " << names_[k] << ": ";
     if (const int gi = monitor_gauge_[k]; gi >= 0) {
@@ -278,10 +301,10 @@ std::vector<std::string> Monitors<Dim>::describe(const State<Dim>& st) const {
       for (std::size_t q = 0; q < reads.size(); ++q)
         os << (q ? ", " : "") << (reads[q] == "pore_pressure" ? "pore_pressure = the fluid's pressure" : reads[q]);
       os << " interpolated from the nodes)";
-    } else if (p < 0) os << "whole system";
+    } else if (monitor_particle_[k] < 0) os << "whole system";
     else {
-      os << "follows " << (water ? "water point " : "solid particle ") << ps.id[p] << " starting at (";
-      for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << ps.x0[p][a];
+      os << "follows " << (water ? "water point " : "solid particle ") << monitor_particle_[k] << " starting at (";
+      for (int a = 0; a < Dim; ++a) os << (a ? ", " : "") << monitor_x0_[k][static_cast<std::size_t>(a)];
       os << ")";
     }
     lines.push_back(os.str());

@@ -68,7 +68,7 @@ class Monitors {
   }
   /// One line per monitor: the particle it follows and where it started, a gauge's line, an
   /// Eulerian probe's point and what it reads, or "whole system".
-  std::vector<std::string> describe(const State<Dim>& st) const;
+  std::vector<std::string> describe() const;
 
  private:
   // Point quantities, then those of no particle (kinetic onwards: energies, work, a gauge's level,
@@ -97,6 +97,7 @@ class Monitors {
   std::vector<std::string> names_;
   std::vector<std::int64_t> monitor_particle_;  // ids, -1 for global
   std::vector<char> monitor_water_;             // per monitor: follows a water point
+  std::vector<std::array<double, 3>> monitor_x0_;  // per monitor: the followed point's x0 (m; for the log)
   std::vector<int> monitor_gauge_;              // per monitor: index into gauges_, -1 for none
   std::vector<int> monitor_probe_;              // per monitor: index into probes_, -1 for none
   std::vector<Gauge> gauges_;

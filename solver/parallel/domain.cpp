@@ -3,7 +3,11 @@
 #include <petscdmda.h>
 #include <petscsf.h>
 
+#include <algorithm>
 #include <array>
+#include <cstdlib>
+#include <cstring>
+#include <numeric>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -415,6 +419,104 @@ std::vector<std::int64_t> carry_values(const std::vector<std::int64_t>& keys, co
 
 template bool move_particles<2>(ParticleSet<2>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&);
 template bool move_particles<3>(ParticleSet<3>&, const std::vector<int>&, const FieldBytes&, std::vector<std::max_align_t>&);
+std::vector<long> start_slices(long n) {
+  const long R = ranks();
+  std::vector<long> counts(static_cast<std::size_t>(R), 0);
+  const char* how = std::getenv("SWMPM_START_SLICES");
+  if (how && std::string(how) == "last") {
+    counts.back() = n;
+    return counts;
+  }
+  for (long r = 0; r < R; ++r) counts[static_cast<std::size_t>(r)] = n / R + (r < n % R ? 1 : 0);
+  return counts;
+}
+
+template <int Dim>
+void scatter_slices(ParticleSet<Dim>& ps, const std::vector<long>& counts) {
+  if (ranks() == 1) return;
+  // Rank 0's set kind and size; the others make an empty set of that kind.
+  const std::vector<std::int64_t> head =
+      broadcast(rank() == 0 ? std::vector<std::int64_t>{static_cast<std::int64_t>(ps.size()), ps.kind()}
+                            : std::vector<std::int64_t>{});
+  const std::size_t n = static_cast<std::size_t>(head.at(0));
+  if (rank() != 0) ps = ParticleSet<Dim>::of_kind(static_cast<int>(head.at(1)));
+  ps.key.resize(ps.size());
+  std::iota(ps.key.begin(), ps.key.end(), std::int64_t{0});
+  const FieldBytes layout = layout_over_ranks(ps);
+  std::size_t record = 0;
+  {
+    std::size_t k = 0;
+    ps.for_each_field([&](auto& f) {
+      if (layout.active[k++]) record += sizeof(f[0]);
+    });
+  }
+  std::vector<long> first(counts.size() + 1, 0);
+  for (std::size_t r = 0; r < counts.size(); ++r) first[r + 1] = first[r] + counts[r];
+  if (first.back() != static_cast<long>(n)) throw std::logic_error("scatter_slices: the slices do not add up to the set");
+  const std::size_t round = std::max<std::size_t>(1, (std::size_t{256} << 20) / std::max<std::size_t>(record, 1));
+  ParticleSet<Dim> mine = ps.empty_like();
+  std::vector<std::max_align_t> scratch;
+  for (std::size_t a = 0; a < n; a += round) {
+    const std::size_t b = std::min(n, a + round);
+    ParticleSet<Dim> part = ps.empty_like();
+    std::vector<int> dest;
+    if (rank() == 0) {
+      std::size_t k = 0;
+      part.for_each_field_with(ps, [&](auto& to, auto& from) {
+        if (!layout.active[k++]) return;
+        to.assign(from.begin() + static_cast<std::ptrdiff_t>(a), from.begin() + static_cast<std::ptrdiff_t>(b));
+      });
+      for (std::size_t p = a; p < b; ++p)
+        dest.push_back(static_cast<int>(std::upper_bound(first.begin(), first.end(), static_cast<long>(p)) - first.begin() - 1));
+    }
+    move_particles(part, dest, layout, scratch);
+    std::size_t k = 0;
+    mine.for_each_field_with(part, [&](auto& to, auto& from) {
+      if (layout.active[k++]) to.insert(to.end(), from.begin(), from.end());
+    });
+  }
+  ps = std::move(mine);
+}
+
+template <int Dim>
+ParticleSet<Dim> all_gather_set(const ParticleSet<Dim>& ps) {
+  if (ranks() == 1) return ps;
+  ParticleSet<Dim> mine = ps;
+  const FieldBytes layout = layout_over_ranks(mine);
+  std::vector<char> bytes;
+  std::size_t k = 0;
+  mine.for_each_field([&](auto& f) {
+    if (!layout.active[k++]) return;
+    const char* b = reinterpret_cast<const char*>(f.data());
+    bytes.insert(bytes.end(), b, b + f.size() * sizeof(f[0]));
+  });
+  const std::vector<long> counts = all_gather(static_cast<long>(mine.size()));
+  const std::vector<std::vector<char>> parts = all_gather(bytes);
+  ParticleSet<Dim> all = mine.empty_like();
+  std::vector<std::size_t> at(parts.size(), 0);  // each part's next field
+  k = 0;
+  all.for_each_field([&](auto& f) {
+    if (!layout.active[k++]) return;
+    using T = typename std::decay_t<decltype(f)>::value_type;
+    for (std::size_t r = 0; r < parts.size(); ++r) {
+      const std::size_t n = static_cast<std::size_t>(counts[r]);
+      const std::size_t before = f.size();
+      f.resize(before + n);
+      std::memcpy(static_cast<void*>(f.data() + before), parts[r].data() + at[r], n * sizeof(T));
+      at[r] += n * sizeof(T);
+    }
+  });
+  std::vector<int> order(all.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return all.key[static_cast<std::size_t>(a)] < all.key[static_cast<std::size_t>(b)]; });
+  Reorder<Dim>().apply(all, order);
+  return all;
+}
+
+template ParticleSet<2> all_gather_set<2>(const ParticleSet<2>&);
+template ParticleSet<3> all_gather_set<3>(const ParticleSet<3>&);
+template void scatter_slices<2>(ParticleSet<2>&, const std::vector<long>&);
+template void scatter_slices<3>(ParticleSet<3>&, const std::vector<long>&);
 template ParticleSet<2> gather_set<2>(const ParticleSet<2>&);
 template ParticleSet<3> gather_set<3>(const ParticleSet<3>&);
 

@@ -120,11 +120,28 @@ template <int Dim>
 bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const FieldBytes& layout,
                     std::vector<std::max_align_t>& scratch);
 
+/// A fresh start under mpirun: rank 0 read the whole set from its file (`ps`; the other ranks hold
+/// an empty set). Afterwards rank r holds the particles [first_r, first_r + counts[r]) of the
+/// file's order, each with its place there as its key (the one-rank run's storage order), and
+/// every rank's set carries the fields rank 0's does. Sent in rounds of at most 256 MB, so that no
+/// message count passes MPI's int; rank 0 holds the whole set until the last round. Collective.
+template <int Dim>
+void scatter_slices(ParticleSet<Dim>& ps, const std::vector<long>& counts);
+/// The particles per rank of a start's slices (scatter_slices) of a set of n: n / R each, the
+/// remainder spread over the first ranks. With SWMPM_START_SLICES=last (for the tests) the last
+/// rank gets them all: every setup step must then reduce over ranks that hold none.
+std::vector<long> start_slices(long n);
+
 /// Every rank's particles of a set, on rank 0, in key order: the one-rank run's set in its storage
 /// order (the others get an empty set). Collective. It costs rank 0 the memory of the whole set:
 /// for the tests and for what is built once from the whole set (the double-point tie table).
 template <int Dim>
 ParticleSet<Dim> gather_set(const ParticleSet<Dim>& ps);
+
+/// Every rank's particles of a set, on every rank, in key order (for a small set: the loaded
+/// particles of a start). Collective.
+template <int Dim>
+ParticleSet<Dim> all_gather_set(const ParticleSet<Dim>& ps);
 
 /// Values that travel with particles: `values[p]` of this rank's particle p (key keys[p]) goes
 /// to rank dest[p], as move_particles sends the particle; returns the values of the particles this
@@ -152,9 +169,6 @@ class Domain {
   Domain() = default;
 
   bool active() const { return ranks() > 1; }
-  /// Whether each rank holds only its share of the particles (distribute() has run); before, every
-  /// rank holds them all (a run's start, a resume's replay of the initialisation).
-  bool shared_out() const { return active() && !cuts_.empty(); }
   int axis() const { return axis_; }
   int width() const { return width_; }
   const std::vector<int>& cuts() const { return cuts_; }
@@ -162,8 +176,8 @@ class Domain {
 
   /// The decomposition of grid `g` along the scatter schedule's stripe axis (transfer::stripe_axis)
   /// for shape functions of `support` nodes per axis, with the cuts balanced on `sets` (the whole
-  /// run's particles, which every rank holds at the start). Each rank then keeps its own particles
-  /// (keys: their index in the whole set).
+  /// run's particles, which every rank holds: a resume from a one-rank checkpoint). Each rank then
+  /// keeps its own particles (keys: their index in the whole set).
   ///
   /// With `carried`, each rank holds a share of the particles instead (any slice of the whole
   /// sets, with their keys; a resume from a checkpoint's pieces): the cuts are balanced on the

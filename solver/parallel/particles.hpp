@@ -41,9 +41,11 @@ inline std::vector<int> order_by(const std::vector<std::int64_t>& place) {
   return order;
 }
 
-/// A run's start under mpirun: every rank read all particles (a fresh run's, or a checkpoint's
-/// with the schedule order restored for the whole set); each keeps its own and the part of the
-/// order that indexes them, and the schedule learns the exchange. With `water_schedule` (the
+/// A run's start under mpirun: each rank holds a slice of the particles (a fresh run's, dealt out
+/// by parallel::scatter_slices, or the pieces of a checkpoint it read: State::shares) and sends
+/// every particle to its owner, each carrying its place in the schedule order; or every rank read
+/// a whole checkpoint (one rank's) and keeps its own and the part of the order that indexes them.
+/// The schedule then learns the exchange. With `water_schedule` (the
 /// double-point formulations) the water points too (set 1 of the domain), the cuts balanced on
 /// both sets' particles. Nothing at one rank.
 template <class Shape, int Dim>
@@ -99,13 +101,14 @@ void distribute(Domain<Dim>& d, const Grid<Dim>& g, State<Dim>& st, StripeSchedu
   regroup_by_material(st.solid, material_particles);
 }
 
-/// porous::coincident_points over the whole run: under mpirun, once each rank holds its share of
-/// the points, rank 0 builds the table from the gathered sets and sends it to every rank (the same
-/// table on every rank, as one rank builds it). Collective then.
+/// porous::coincident_points over the whole run: under mpirun each rank holds a share of the
+/// points (its slice before distribute, its own after), so rank 0 builds the table from the
+/// gathered sets and sends it to every rank (the same table on every rank, as one rank builds it).
+/// Collective then.
 template <int Dim>
 std::vector<std::int64_t> coincident_points(const Domain<Dim>& d, const ParticleSet<Dim>& soil,
                                             const ParticleSet<Dim>& water) {
-  if (!d.shared_out()) return porous::coincident_points(soil, water);
+  if (!d.active()) return porous::coincident_points(soil, water);
   const ParticleSet<Dim> whole_soil = gather_set(soil), whole_water = gather_set(water);
   return broadcast(rank() == 0 ? porous::coincident_points(whole_soil, whole_water) : std::vector<std::int64_t>{});
 }

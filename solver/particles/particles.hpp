@@ -121,8 +121,24 @@ struct ParticleSet {
   /// Calls f(field) for every per-particle array (the one list of fields; resize-free helpers use it).
   template <class Fn>
   void for_each_field(Fn&& f) {
-    f(id), f(x), f(x0), f(v), f(l), f(m), f(V), f(V0), f(F), f(L), f(sigma), f(eps_p), f(material), f(body),
-        f(faces), f(n), f(p), f(m_f), f(v_f), f(fluid_material), f(state), f(key);
+    zip_fields(f, *this);
+  }
+  /// Calls f(field, o's same field) for every per-particle array of both sets.
+  template <class Fn>
+  void for_each_field_with(const ParticleSet& o, Fn&& f) {
+    zip_fields(f, *this, o);
+  }
+  /// An empty set that carries the fields this one does (pore fluid, model state, water points).
+  ParticleSet empty_like() const { return of_kind(kind()); }
+  /// The flags empty_like copies, as one word (bit 0 pore fluid, 1 model state, 2 water points,
+  /// 3 water stress), and a set of none made like a set of those flags: for sending a set's kind.
+  int kind() const { return carries_fluid_ | carries_state_ << 1 | water_points_ << 2 | water_stress_ << 3; }
+  static ParticleSet of_kind(int k) {
+    ParticleSet e;
+    if (k & 4) e.make_water_points((k & 8) != 0);
+    if (k & 1) e.add_fluid();
+    if (k & 2) e.add_material_state();
+    return e;
   }
   /// Bytes held per particle by this set (for run.json and the memory benchmark): the fields every
   /// set has, plus the pore-fluid and model-state fields when allocated.
@@ -152,6 +168,13 @@ struct ParticleSet {
   }
 
  private:
+  /// The one list of per-particle fields, zipped over one or more sets.
+  template <class Fn, class... Sets>
+  static void zip_fields(Fn& f, Sets&... s) {
+    f(s.id...), f(s.x...), f(s.x0...), f(s.v...), f(s.l...), f(s.m...), f(s.V...), f(s.V0...), f(s.F...), f(s.L...),
+        f(s.sigma...), f(s.eps_p...), f(s.material...), f(s.body...), f(s.faces...), f(s.n...), f(s.p...),
+        f(s.m_f...), f(s.v_f...), f(s.fluid_material...), f(s.state...), f(s.key...);
+  }
   bool carries_fluid_ = false;
   bool carries_state_ = false;
   bool water_points_ = false;  // make_water_points()

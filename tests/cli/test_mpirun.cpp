@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <numeric>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -18,11 +19,12 @@ namespace swmpm::testing {
 namespace {
 
 /// `mpirun -n N swmpm ARGS` (oversubscribed: N may exceed the cores), output captured under dir.
-Result mpirun(int n, const std::string& args, const fs::path& dir) {
+/// `env`: more VAR=value words for the ranks' environment.
+Result mpirun(int n, const std::string& args, const fs::path& dir, const std::string& env = {}) {
   const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
   // `timeout`: a rank that waits for ever in a collective fails the test instead of hanging CI.
   const std::string cmd = "timeout 300 env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
-                          "OMPI_MCA_mpi_yield_when_idle=1 " +
+                          "OMPI_MCA_mpi_yield_when_idle=1 " + env + " " +
                           std::string(SWMPM_MPIEXEC) + " -n " + std::to_string(n) + " " + SWMPM_EXE + " " + args +
                           " > " + out + " 2> " + err;
   const int raw = std::system(cmd.c_str());
@@ -272,6 +274,55 @@ TEST(Mpirun, ExplicitSinglePointOnTwoRanksIsBitwiseTheOneRankRun2D) {
   const auto rj = load_json(p.many + "/run.json");
   EXPECT_GT(rj["counters"]["particles migrated"].get<double>(), 400.0);
   EXPECT_GE(rj["counters"]["rebalances"].get<double>(), 1.0);
+}
+
+/// The lines of a run's log.txt that say what runs: the first (formulation, particle counts) and
+/// what each monitor follows.
+std::vector<std::string> log_header(const std::string& run) {
+  std::vector<std::string> lines;
+  std::istringstream in(read_text(run + "/log.txt"));
+  for (std::string l; std::getline(in, l);)
+    if (l.find("solving") != std::string::npos || l.rfind("monitor ", 0) == 0) lines.push_back(l);
+  return lines;
+}
+
+TEST(Mpirun, AStartFromSlicesBuildsWhatOneRankBuilds) {
+  // Rank 0 reads the particles and deals them out in slices; each rank builds the formulation,
+  // the loads and the monitors from its slice before the particles go to their owners. Every setup
+  // step that reads the particles must then reduce over the ranks: here two materials (the dry
+  // footing has no pore fluid; the pore-fluid table is per material), a load on a named surface
+  // (its samples shared among the tagged particles of every rank), a load on an axis face, a
+  // prescribed pore pressure (its saturated particles at the face), monitors at a point and on a
+  // particle id (the nearest point over the ranks). On two ranks as dealt out (each a half), and
+  // on three with every particle dealt to the last rank (SWMPM_START_SLICES=last: ranks 0 and 1
+  // build from nothing), the run is the one-rank run bit for bit, and the log says the same.
+  nlohmann::json s = saturated_collapse(2, "gimp");
+  s["name"] = "sliced-start";
+  s["materials"].push_back({{"name", "block"}, {"model", "linear-elastic"}, {"grain_density", 2650.0},
+                            {"porosity", 0.3}, {"youngs_modulus", 1e7}, {"poisson_ratio", 0.3}});
+  s["bodies"].push_back({{"name", "footing"},
+                         {"geometry", {{"type", "footing"}, {"width", 0.1}, {"height", 0.04}, {"center_x", 0.1}, {"on", "column"}}},
+                         {"solid", "block"},
+                         {"particles_per_cell", 2}});
+  s["loads"] = {{{"type", "traction"}, {"body", "footing"}, {"face", "top"}, {"value", {0.0, -3000.0}}},
+                {{"type", "pressure"}, {"body", "column"}, {"face", "x_max"}, {"value", 1000.0}}};
+  for (auto& b : s["boundaries"])
+    if (b["on"] == "y_min") b["fluid"] = "pressure", b["value"] = 500.0;
+  s["output"]["monitors"].push_back({{"name", "one"}, {"particle", 7}, {"quantities", {"displacement_y", "pore_pressure"}}});
+  s["time"]["end"] = 0.1;
+  s["output"]["interval"] = 0.05;
+  const Pair p = solve_both(s, "mpirun-sliced-start", 2);
+  expect_same_answers(p);
+  EXPECT_EQ(log_header(p.many), log_header(p.one));
+  ASSERT_EQ(log_header(p.one).size(), 5u);  // the first line and four monitors
+
+  Pair last = p;
+  last.many = (p.dir / "last").string();
+  ASSERT_EQ(swmpm_cmd("preprocess " + (p.dir / "scene.json").string() + " -o " + last.many + " -q", p.dir).status, 0);
+  last.many_result = mpirun(3, "solve " + last.many + " -q --threads 1", p.dir, "SWMPM_START_SLICES=last");
+  ASSERT_EQ(last.many_result.status, 0) << last.many_result.err;
+  expect_same_answers(last);
+  EXPECT_EQ(log_header(last.many), log_header(p.one));
 }
 
 TEST(Mpirun, ExplicitSinglePointCellPressureConservativeOnTwoRanksIsBitwiseTheOneRankRun3D) {

@@ -80,7 +80,7 @@ class Core : public Formulation<Dim> {
     if (!state.solid.two_phase())
       throw std::runtime_error(name + " needs saturated soil points (porosity in particles/solid.vtu): run swmpm "
                                "preprocess with a body that has a solid and a fluid");
-    if (wet.size() == 0)
+    if (parallel::sum(static_cast<long>(wet.size())) == 0)  // over every rank's points
       throw std::runtime_error(name + " needs water points (particles/fluid.vtu): run swmpm preprocess again");
     for (std::size_t i = 0; i < s.boundaries.size(); ++i) {
       const auto& b = s.boundaries[i];
@@ -90,7 +90,7 @@ class Core : public Formulation<Dim> {
       // The value acts through the face's nodes that carry water: some water must reach the face.
       bool reaches = false;
       for (std::size_t p = 0; p < wet.size() && !reaches; ++p) reaches = domain_ends_on_face(grid_, f, wet.x[p], wet.l[p]);
-      if (!reaches)
+      if (!parallel::any(reaches))  // over every rank's points
         throw std::runtime_error(where + ": no water lies on \"" + b.on +
                                  "\", so the prescribed pore pressure would act on nothing");
     }
@@ -104,12 +104,15 @@ class Core : public Formulation<Dim> {
     }
     const ParticleSet<Dim>& ps = state.solid;
     pore_water_on_soil_ = &wet == &state.solid;
-    for (std::size_t p = 0; p < ps.size(); ++p) {
-      const int fm = fluid_material_of(s, ps, static_cast<int>(p));
+    // The water of each solid material: its last point's (none: dry), over every rank's points.
+    const std::vector<int> water_of = material_value_over_ranks(
+        ps, s.materials.size(), /*last=*/true, [&](int p) { return fluid_material_of(s, ps, p); });
+    for (std::size_t k = 0; k < s.materials.size(); ++k) {
+      const int fm = water_of[k];
       if (fm < 0) continue;
-      auto& pw = pore_[ps.material[p]];
+      auto& pw = pore_[k];
       pw.rho_w = s.materials[fm].at("density");
-      pw.perm = porous::permeability_of(s.materials[ps.material[p]], s.materials[fm]);
+      pw.perm = porous::permeability_of(s.materials[k], s.materials[fm]);
     }
     const std::size_t nodes = grid_.num_nodes();
     soil_.resize(nodes);
@@ -507,20 +510,26 @@ class Core : public Formulation<Dim> {
   void derive_laplace_if_single_densities(const ParticleSet<Dim>& ps, const ParticleSet<Dim>& ws,
                                           WaterDensity&& water_density) {
     if constexpr (kCellMoments) {
-      if (ps.size() == 0 || ws.size() == 0) return;
-      // Every value positive, finite and within 1e-12 of the first.
-      auto one_value = [](std::size_t n, auto&& value_of, double& first) {
-        first = value_of(0);
-        for (std::size_t p = 0; p < n; ++p) {
+      if (parallel::sum(static_cast<long>(ps.size())) == 0 || parallel::sum(static_cast<long>(ws.size())) == 0) return;
+      // Every value positive, finite and within 1e-12 of the first (the first point of the
+      // one-rank order: the lowest key under mpirun), over every rank's points.
+      auto one_value = [](const ParticleSet<Dim>& set, auto&& value_of, double& first) {
+        const std::size_t n = set.size();
+        const long mine = n == 0 ? std::numeric_limits<long>::max() : set.key.size() == n ? static_cast<long>(set.key[0]) : 0L;
+        const long lowest = parallel::min(mine);  // every rank calls it
+        const bool holds_first = n > 0 && mine == lowest;
+        first = parallel::max(holds_first ? value_of(0) : -std::numeric_limits<double>::infinity());
+        bool ok = true;
+        for (std::size_t p = 0; p < n && ok; ++p) {
           const double v = value_of(p);
-          if (!(v > 0.0) || !std::isfinite(v) || std::abs(v - first) > 1e-12 * first) return false;
+          ok = v > 0.0 && std::isfinite(v) && std::abs(v - first) <= 1e-12 * first;
         }
-        return true;
+        return !parallel::any(!ok);
       };
       double rho_s = 0.0, rho_w = 0.0;
-      if (one_value(ps.size(), [&](std::size_t p) { return grain_density(ps, static_cast<int>(p)); }, rho_s) &&
-          one_value(ws.size(), [&](std::size_t p) { return water_density(static_cast<int>(p)); }, rho_w))
-        pressure_.moments().derive_laplace(rho_s, rho_w);
+      const bool single_soil = one_value(ps, [&](std::size_t p) { return grain_density(ps, static_cast<int>(p)); }, rho_s);
+      const bool single_water = one_value(ws, [&](std::size_t p) { return water_density(static_cast<int>(p)); }, rho_w);
+      if (single_soil && single_water) pressure_.moments().derive_laplace(rho_s, rho_w);
     }
   }
 
