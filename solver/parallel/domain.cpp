@@ -432,7 +432,7 @@ std::vector<long> start_slices(long n) {
 }
 
 template <int Dim>
-void scatter_slices(ParticleSet<Dim>& ps, const std::vector<long>& counts) {
+void scatter_slices(ParticleSet<Dim>& ps, const std::vector<long>& counts, std::size_t round_bytes) {
   if (ranks() == 1) return;
   // Rank 0's set kind and size; the others make an empty set of that kind.
   const std::vector<std::int64_t> head =
@@ -453,10 +453,13 @@ void scatter_slices(ParticleSet<Dim>& ps, const std::vector<long>& counts) {
   std::vector<long> first(counts.size() + 1, 0);
   for (std::size_t r = 0; r < counts.size(); ++r) first[r + 1] = first[r] + counts[r];
   if (first.back() != static_cast<long>(n)) throw std::logic_error("scatter_slices: the slices do not add up to the set");
-  const std::size_t round = std::max<std::size_t>(1, (std::size_t{256} << 20) / std::max<std::size_t>(record, 1));
+  // Rank 0 sends the particles after its own slice, a round at a time (each round a copy and a
+  // send buffer of at most 64 MB), then keeps its slice: its peak is the whole set and two rounds.
+  const std::size_t round = std::max<std::size_t>(1, round_bytes / std::max<std::size_t>(record, 1));
+  const std::size_t own = static_cast<std::size_t>(first[1]);
   ParticleSet<Dim> mine = ps.empty_like();
   std::vector<std::max_align_t> scratch;
-  for (std::size_t a = 0; a < n; a += round) {
+  for (std::size_t a = own; a < n; a += round) {
     const std::size_t b = std::min(n, a + round);
     ParticleSet<Dim> part = ps.empty_like();
     std::vector<int> dest;
@@ -474,6 +477,15 @@ void scatter_slices(ParticleSet<Dim>& ps, const std::vector<long>& counts) {
     mine.for_each_field_with(part, [&](auto& to, auto& from) {
       if (layout.active[k++]) to.insert(to.end(), from.begin(), from.end());
     });
+  }
+  if (rank() == 0) {  // its own slice, field by field (each shrunk to its slice at once)
+    std::size_t k = 0;
+    ps.for_each_field([&](auto& f) {
+      if (!layout.active[k++]) return;
+      f.resize(own);
+      f.shrink_to_fit();
+    });
+    return;
   }
   ps = std::move(mine);
 }
@@ -515,8 +527,8 @@ ParticleSet<Dim> all_gather_set(const ParticleSet<Dim>& ps) {
 
 template ParticleSet<2> all_gather_set<2>(const ParticleSet<2>&);
 template ParticleSet<3> all_gather_set<3>(const ParticleSet<3>&);
-template void scatter_slices<2>(ParticleSet<2>&, const std::vector<long>&);
-template void scatter_slices<3>(ParticleSet<3>&, const std::vector<long>&);
+template void scatter_slices<2>(ParticleSet<2>&, const std::vector<long>&, std::size_t);
+template void scatter_slices<3>(ParticleSet<3>&, const std::vector<long>&, std::size_t);
 template ParticleSet<2> gather_set<2>(const ParticleSet<2>&);
 template ParticleSet<3> gather_set<3>(const ParticleSet<3>&);
 

@@ -123,10 +123,11 @@ bool move_particles(ParticleSet<Dim>& ps, const std::vector<int>& dest, const Fi
 /// A fresh start under mpirun: rank 0 read the whole set from its file (`ps`; the other ranks hold
 /// an empty set). Afterwards rank r holds the particles [first_r, first_r + counts[r]) of the
 /// file's order, each with its place there as its key (the one-rank run's storage order), and
-/// every rank's set carries the fields rank 0's does. Sent in rounds of at most 256 MB, so that no
-/// message count passes MPI's int; rank 0 holds the whole set until the last round. Collective.
+/// every rank's set carries the fields rank 0's does. Rank 0 sends the other slices in rounds of
+/// at most 64 MB (no message count near MPI's int), then shrinks the set to its own slice: its
+/// peak is the whole set and two rounds, every other rank's its slice and a round. Collective.
 template <int Dim>
-void scatter_slices(ParticleSet<Dim>& ps, const std::vector<long>& counts);
+void scatter_slices(ParticleSet<Dim>& ps, const std::vector<long>& counts, std::size_t round_bytes = std::size_t{64} << 20);
 /// The particles per rank of a start's slices (scatter_slices) of a set of n: n / R each, the
 /// remainder spread over the first ranks. With SWMPM_START_SLICES=last (for the tests) the last
 /// rank gets them all: every setup step must then reduce over ranks that hold none.

@@ -157,6 +157,63 @@ TEST(Domain, GatherSetGivesRankZeroTheWholeSetInTheOneRankOrder) {
   }
 }
 
+TEST(Domain, ScatterSlicesDealsRankZerosSetOutInTheFilesOrder) {
+  // Rank 0 holds the whole set as read (pore fluid and model state allocated), the others an
+  // empty set of no kind. Rounds of 7 particles: many rounds, each crossing slice boundaries.
+  const std::size_t n = 1001;
+  auto whole = [&] {
+    ParticleSet<2> ps = cloud(n);
+    ps.add_fluid();
+    ps.add_material_state();
+    for (std::size_t p = 0; p < n; ++p) ps.p[p] = 3.0 * static_cast<double>(p), ps.state[p][2] = -static_cast<double>(p);
+    return ps;
+  };
+  const ParticleSet<2> all = whole();
+  const std::size_t record_guess = 7 * 400;
+  for (const bool to_last : {false, true}) {
+    std::vector<long> counts(static_cast<std::size_t>(ranks()), 0);
+    for (int r = 0; r < ranks(); ++r) counts[static_cast<std::size_t>(r)] = static_cast<long>(n) / ranks() + (r < static_cast<long>(n) % ranks());
+    if (to_last) counts.assign(counts.size(), 0), counts.back() = static_cast<long>(n);
+    ParticleSet<2> mine = rank() == 0 ? whole() : ParticleSet<2>{};
+    scatter_slices(mine, counts, record_guess);
+    long first = 0;
+    for (int r = 0; r < rank(); ++r) first += counts[static_cast<std::size_t>(r)];
+    ASSERT_EQ(static_cast<long>(mine.size()), counts[static_cast<std::size_t>(rank())]) << to_last;
+    EXPECT_TRUE(mine.two_phase());
+    EXPECT_TRUE(mine.has_material_state());
+    for (std::size_t j = 0; j < mine.size(); ++j) {
+      const std::size_t p = static_cast<std::size_t>(first) + j;
+      EXPECT_EQ(mine.key[j], static_cast<std::int64_t>(p));
+      EXPECT_EQ(mine.id[j], all.id[p]);
+      EXPECT_EQ(mine.x[j], all.x[p]);
+      EXPECT_EQ(mine.m[j], all.m[p]);
+      EXPECT_EQ(mine.p[j], all.p[p]);
+      EXPECT_EQ(mine.state[j], all.state[p]);
+    }
+    EXPECT_EQ(sum(static_cast<long>(mine.size())), static_cast<long>(n));
+  }
+}
+
+TEST(Domain, AllGatherSetGivesEveryRankTheWholeSetInKeyOrder) {
+  // Each rank holds every ranks()-th particle of the whole set (keys out of rank order).
+  const ParticleSet<2> all = cloud(500);
+  ParticleSet<2> mine = all;
+  mine.key.resize(mine.size());
+  for (std::size_t p = 0; p < mine.size(); ++p) mine.key[p] = static_cast<std::int64_t>(p);
+  std::vector<int> keep;
+  for (std::size_t p = static_cast<std::size_t>(rank()); p < all.size(); p += static_cast<std::size_t>(ranks()))
+    keep.push_back(static_cast<int>(p));
+  compact(mine, keep, layout_over_ranks(mine));
+  const ParticleSet<2> got = all_gather_set(mine);
+  ASSERT_EQ(got.size(), all.size());
+  for (std::size_t p = 0; p < all.size(); ++p) {
+    EXPECT_EQ(got.key[p], static_cast<std::int64_t>(p));
+    EXPECT_EQ(got.id[p], all.id[p]);
+    EXPECT_EQ(got.x[p], all.x[p]);
+    EXPECT_EQ(got.V[p], all.V[p]);
+  }
+}
+
 TEST(Domain, GhostColumnsGetTheirOwnersValues) {
   // Each rank writes f(node) on its own columns and garbage elsewhere; fill_ghosts(w) brings the
   // owners' values into the w columns either side (what a stencil of reach w reads).
