@@ -122,7 +122,8 @@ Monitors<Dim>::Monitors(const scene::Scene& s, const State<Dim>& st, const Formu
     // Columns refer to the particle by id: formulations may reorder particles (State::index_of_id).
     monitor_particle_.push_back(pid);
     monitor_water_.push_back(water && pid >= 0);
-    std::array<double, 3> x0{0.0, 0.0, 0.0};  // the followed point's start, from the rank that holds it
+    std::array<double, 3> x0;  // the followed point's start, from the rank that holds it (the others add -0)
+    x0.fill(parallel::distributed() ? -0.0 : 0.0);
     for (std::size_t p = 0; pid >= 0 && p < ps.size(); ++p)
       if (ps.id[p] == pid)
         for (int a = 0; a < Dim; ++a) x0[static_cast<std::size_t>(a)] = ps.x0[p][a];
@@ -181,9 +182,12 @@ template <int Dim>
 void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, double external_work) {
   const auto& ps = st.solid;
   // Each column's value on this rank. Under mpirun a followed particle lives on one rank (the
-  // others add 0), energies are this rank's share, water levels this rank's highest point: the
+  // others add -0), energies are this rank's share, water levels this rank's highest point: the
   // sums and maxima over the ranks are the row.
-  values_.assign(columns_.size(), 0.0);
+  // The other ranks' part of a value one rank holds is -0, the identity of IEEE addition, so that
+  // a -0 it holds (a zero stress in tension's sign) stays -0 in the sum, as one rank writes it.
+  const double none = parallel::distributed() ? -0.0 : 0.0;
+  values_.assign(columns_.size(), none);
   highest_.assign(columns_.size(), -std::numeric_limits<double>::infinity());
   double ke = -1.0, se = -1.0;
   for (std::size_t col = 0; col < columns_.size(); ++col) {
@@ -191,19 +195,19 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
     double& val = values_[col];
     if (c.q == Q::level) {
       const Gauge& g = gauges_[static_cast<std::size_t>(c.comp)];
-      if (g.grid) val = parallel::rank() == 0 ? f.grid_water_level(g.x, g.z) : 0.0;
+      if (g.grid) val = parallel::rank() == 0 ? f.grid_water_level(g.x, g.z) : none;
       else if (const double top = water_level(st.fluid, g); std::isfinite(top)) highest_[col] = top;
       else if (!parallel::distributed()) highest_[col] = top;  // NaN: no liquid point near the line
       continue;
     }
     if (c.q == Q::probe) {  // the grid's fluid at a fixed point (the last completed step's nodes)
-      val = parallel::rank() == 0 ? f.grid_value(probes_[static_cast<std::size_t>(c.comp)], c.grid) : 0.0;
+      val = parallel::rank() == 0 ? f.grid_value(probes_[static_cast<std::size_t>(c.comp)], c.grid) : none;
       continue;
     }
     if (c.water) {  // a water point: its own position, velocity, pore pressure and porosity
       const auto& ws = st.fluid;
       const int p = water_index(ws, c.particle);
-      if (p < 0) val = parallel::distributed() ? 0.0 : std::numeric_limits<double>::quiet_NaN();  // it left the run (solver.escaped_water)
+      if (p < 0) val = parallel::distributed() ? none : std::numeric_limits<double>::quiet_NaN();  // it left the run (solver.escaped_water)
       else if (c.q == Q::disp) val = ws.x[p][c.comp] - ws.x0[p][c.comp];
       else if (c.q == Q::vel) val = ws.v[p][c.comp];
       else if (c.q == Q::pore) val = ws.p[p];
@@ -229,7 +233,7 @@ void Monitors<Dim>::record(const State<Dim>& st, const Formulation<Dim>& f, doub
         se = se < 0 ? f.strain_energy(st) : se;
         val = ke + se;
         break;
-      case Q::work: val = parallel::rank() == 0 ? external_work : 0.0; break;
+      case Q::work: val = parallel::rank() == 0 ? external_work : none; break;
       case Q::level:
       case Q::probe: break;  // above
     }

@@ -309,12 +309,16 @@ TEST(Mpirun, AStartFromSlicesBuildsWhatOneRankBuilds) {
   for (auto& b : s["boundaries"])
     if (b["on"] == "y_min") b["fluid"] = "pressure", b["value"] = 500.0;
   s["output"]["monitors"].push_back({{"name", "one"}, {"particle", 7}, {"quantities", {"displacement_y", "pore_pressure"}}});
+  // The footing starts unstressed: its mean stress at t = 0 is -0, which the other ranks' part of
+  // the row must keep (they add -0, not 0).
+  s["output"]["monitors"].push_back({{"name", "block"}, {"at", {0.1, 0.22}}, {"quantities", {"mean_effective_stress"}}});
   s["time"]["end"] = 0.1;
   s["output"]["interval"] = 0.05;
   const Pair p = solve_both(s, "mpirun-sliced-start", 2);
   expect_same_answers(p);
   EXPECT_EQ(log_header(p.many), log_header(p.one));
-  ASSERT_EQ(log_header(p.one).size(), 5u);  // the first line and four monitors
+  ASSERT_EQ(log_header(p.one).size(), 6u);  // the first line and five monitors
+  EXPECT_NE(read_text(p.one + "/monitors.csv").find(",-0\n"), std::string::npos);  // the footing's mean stress at t = 0
 
   Pair last = p;
   last.many = (p.dir / "last").string();
