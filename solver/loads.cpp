@@ -260,6 +260,8 @@ void share_samples(const ParticleSet<Dim>& ps, const std::vector<int>& cand, con
 
 }  // namespace
 
+namespace {
+
 /// The face bits (ParticleSet::faces) of the faces and named surfaces the scene loads: the
 /// particles the loads are built from carry one of them.
 std::uint32_t loaded_faces(const scene::Scene& s, bool pore_pressure_forces) {
@@ -288,6 +290,8 @@ ParticleSet<Dim> loaded_particles_over_ranks(const ParticleSet<Dim>& ps, std::ui
   });
   return parallel::all_gather_set(mine);
 }
+
+}  // namespace
 
 template <int Dim>
 ParticleLoads<Dim>::ParticleLoads(const scene::Scene& s, const Grid<Dim>& g, const ParticleSet<Dim>& local,
