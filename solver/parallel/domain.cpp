@@ -512,6 +512,7 @@ ParticleSet<Dim> all_gather_set(const ParticleSet<Dim>& ps) {
     using T = typename std::decay_t<decltype(f)>::value_type;
     for (std::size_t r = 0; r < parts.size(); ++r) {
       const std::size_t n = static_cast<std::size_t>(counts[r]);
+      if (n == 0) continue;  // (memcpy from an empty part's null data is not allowed even for 0 bytes)
       const std::size_t before = f.size();
       f.resize(before + n);
       std::memcpy(static_cast<void*>(f.data() + before), parts[r].data() + at[r], n * sizeof(T));
