@@ -503,8 +503,7 @@ class ExplicitSinglePoint final : public Formulation<Dim> {
     }
     std::array<double, 6> most{scale, rho_max, rho_c, v_max, -y_lo, y_hi};  // over every rank's points
     parallel::max(std::span<double>(most));
-    std::tie(scale, rho_max, rho_c, v_max) = std::tuple(most[0], most[1], most[2], most[3]);
-    y_lo = -most[4], y_hi = most[5];
+    scale = most[0], rho_max = most[1], rho_c = most[2], v_max = most[3], y_lo = -most[4], y_hi = most[5];
     const double g = std::sqrt(s.gravity[0] * s.gravity[0] + s.gravity[1] * s.gravity[1] + s.gravity[2] * s.gravity[2]);
     if (y_hi > y_lo) scale = std::max(scale, rho_max * g * (y_hi - y_lo));
     return std::max(scale, rho_c * v_max);

@@ -574,7 +574,6 @@ class MpmFem final : public Formulation<Dim> {
 
   /// points_node_box of every rank's points (under mpirun each rank holds a slice of them). Collective.
   NodeBox<Dim> points_node_box_over_ranks(const ParticleSet<Dim>& ps) const {
-    if (!parallel::distributed()) return points_node_box(ps);
     NodeBox<Dim> b = points_node_box(ps);
     if (ps.size() == 0)
       for (int a = 0; a < Dim; ++a) b.lo[a] = std::numeric_limits<int>::max();  // nothing to the union

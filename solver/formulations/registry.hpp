@@ -140,19 +140,17 @@ inline std::vector<char> materials_present(const std::vector<std::vector<int>>& 
 
 /// Per material k (of `materials`), of(p) at the first point p of material k (`last`: the last
 /// one) in the one-rank storage order for which of(p) >= 0, over every rank's points; -1 where
-/// no point has one. The one-rank order is the keys' under mpirun (ParticleSet::key), the
-/// storage order at one rank. Collective.
+/// no point has one (the one-rank order: ParticleSet::place). Collective.
 template <int Dim, class Of>
 std::vector<int> material_value_over_ranks(const ParticleSet<Dim>& ps, std::size_t materials, bool last, Of&& of) {
   constexpr long none_first = std::numeric_limits<long>::max(), none_last = -1;
   const long none = last ? none_last : none_first;
   std::vector<long> at(materials, none), value(materials, -1);
-  const bool keyed = ps.key.size() == ps.size();
   for (std::size_t p = 0; p < ps.size(); ++p) {
     const int v = of(static_cast<int>(p));
     if (v < 0) continue;
     const std::size_t k = static_cast<std::size_t>(ps.material[p]);
-    const long place = keyed ? static_cast<long>(ps.key[p]) : static_cast<long>(p);
+    const long place = static_cast<long>(ps.place(p));
     if (last ? place > at[k] : place < at[k]) at[k] = place, value[k] = v;
   }
   std::vector<long> chosen = at;

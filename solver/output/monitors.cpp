@@ -24,10 +24,9 @@ std::int64_t nearest_over_ranks(const ParticleSet<Dim>& ps, int particle, double
   const double best = parallel::min(particle < 0 ? std::numeric_limits<double>::max() : d2);
   const bool candidate = particle >= 0 && d2 == best;
   const std::size_t p = static_cast<std::size_t>(std::max(particle, 0));
-  const long key = !candidate ? std::numeric_limits<long>::max()
-                   : ps.key.size() == ps.size() ? static_cast<long>(ps.key[p]) : static_cast<long>(p);
-  const long first = parallel::min(key);
-  return parallel::max(candidate && key == first ? static_cast<long>(ps.id[p]) : -1L);
+  constexpr long unplaced = std::numeric_limits<long>::max();
+  return parallel::value_at_lowest(candidate ? static_cast<long>(ps.place(p)) : unplaced,
+                                   candidate ? static_cast<long>(ps.id[p]) : -1L, -1L, unplaced);
 }
 
 }  // namespace

@@ -58,6 +58,15 @@ std::vector<std::vector<char>> all_gather(const std::vector<char>& bytes);
 std::vector<std::vector<char>> all_to_all(const std::vector<std::vector<char>>& to);
 void barrier();
 
+/// The value of the rank whose `place` is the lowest over the ranks (`none` when every rank's
+/// place is `unplaced`): what one rank's search keeps when it takes the first in its order.
+/// Collective.
+template <class T>
+T value_at_lowest(long place, T value, T none, long unplaced) {
+  const long lowest = min(place);
+  return max(place == lowest && place != unplaced ? value : none);
+}
+
 /// Seconds of wall time this rank spent in communication (collectives, ghost exchange, migration).
 /// A collective's time includes the wait for the slowest rank (load imbalance shows here).
 double communication_seconds();

@@ -61,6 +61,8 @@ struct ParticleSet {
   std::vector<std::int64_t> key;
 
   std::size_t size() const { return x.size(); }
+  /// Point q's place in the one-rank run's storage order: its key under mpirun, q at one rank.
+  std::int64_t place(std::size_t q) const { return key.size() == size() ? key[q] : static_cast<std::int64_t>(q); }
   bool two_phase() const { return carries_fluid_; }
   bool has_material_state() const { return carries_state_; }
   /// Allocates the model state (zero) for a set of the current size.

@@ -515,10 +515,9 @@ class Core : public Formulation<Dim> {
       // one-rank order: the lowest key under mpirun), over every rank's points.
       auto one_value = [](const ParticleSet<Dim>& set, auto&& value_of, double& first) {
         const std::size_t n = set.size();
-        const long mine = n == 0 ? std::numeric_limits<long>::max() : set.key.size() == n ? static_cast<long>(set.key[0]) : 0L;
-        const long lowest = parallel::min(mine);  // every rank calls it
-        const bool holds_first = n > 0 && mine == lowest;
-        first = parallel::max(holds_first ? value_of(0) : -std::numeric_limits<double>::infinity());
+        constexpr long unplaced = std::numeric_limits<long>::max();
+        first = parallel::value_at_lowest(n ? static_cast<long>(set.place(0)) : unplaced, n ? value_of(0) : 0.0,
+                                          -std::numeric_limits<double>::infinity(), unplaced);
         bool ok = true;
         for (std::size_t p = 0; p < n && ok; ++p) {
           const double v = value_of(p);
